@@ -1,0 +1,11 @@
+#include "commands.hpp"
+
+namespace rowloc::apps {
+
+void RegisterCommands(CLI::App& app) {
+  RegisterExampleCommand(app);
+  RegisterMapCommands(app);
+  RegisterMappingCommands(app);
+}
+
+}  // namespace rowloc::apps

@@ -1,0 +1,83 @@
+// `rowloc map sample` (generate the synthetic sample row map) and `rowloc map info` (read,
+// validate and describe a row map file).
+#include "commands.hpp"
+
+#include "rowloc/geometry/row_map.hpp"
+#include "rowloc/mapio/row_map_geojson.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <limits>
+#include <memory>
+#include <string>
+
+namespace rowloc::apps {
+namespace {
+
+struct SampleOptions {
+  geometry::SampleRowMapParams params;
+  std::string output_path;
+};
+
+void RunSample(const SampleOptions& o) {
+  const geometry::RowMap map = geometry::MakeSampleRowMap(o.params);
+  mapio::WriteRowMapGeoJson(map, o.output_path);
+  spdlog::info("wrote {} rows ({} segments) to {}", map.rows.size(), map.SegmentCount(), o.output_path);
+}
+
+void RunInfo(const std::string& path) {
+  const geometry::RowMap map = mapio::ReadRowMapGeoJson(path);
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  double length = 0.0;
+  for (const geometry::Row& row : map.rows) {
+    for (const auto& p : row.points_m) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    for (std::size_t s = 0; s < row.SegmentCount(); ++s) {
+      const auto [a, b] = row.Segment(s);
+      length += (b - a).norm();
+    }
+  }
+  fmt::print("{}\n  origin: {:.8f} N, {:.8f} E, {:.3f} m (WGS84)\n", path, map.origin.latitude_deg,
+             map.origin.longitude_deg, map.origin.altitude_m);
+  fmt::print("  rows: {}, segments: {}, total outline length: {:.2f} m\n", map.rows.size(),
+             map.SegmentCount(), length);
+  fmt::print("  extent (local ENU): x [{:.2f}, {:.2f}] m, y [{:.2f}, {:.2f}] m\n", lo.x(), hi.x(),
+             lo.y(), hi.y());
+  for (const geometry::Row& row : map.rows) {
+    fmt::print("  {:<12} {:<8} {} vertices\n", row.id, row.closed ? "polygon" : "polyline",
+               row.points_m.size());
+  }
+}
+
+}  // namespace
+
+void RegisterMapCommands(CLI::App& app) {
+  CLI::App* map = app.add_subcommand("map", "Row map files (GeoJSON)");
+  map->require_subcommand(1);
+
+  auto sample = std::make_shared<SampleOptions>();
+  CLI::App* gen = map->add_subcommand("sample", "Write the synthetic sample row map (docs/map-format.md)");
+  gen->add_option("-o,--output", sample->output_path, "Output GeoJSON file")->required();
+  gen->add_option("--rows", sample->params.row_count, "Number of rows");
+  gen->add_option("--spacing", sample->params.row_spacing_m, "Row spacing [m]");
+  gen->add_option("--length", sample->params.row_length_m, "Row length [m]");
+  gen->add_option("--width", sample->params.canopy_width_m, "Canopy width at slice height [m]");
+  gen->add_option("--bow", sample->params.bow_m, "Lateral sag of the rows at mid-length [m]");
+  gen->add_option("--heading", sample->params.heading_rad, "Row direction from +East, CCW [rad]");
+  gen->add_option("--vertex-spacing", sample->params.vertex_spacing_m, "Vertex spacing along rows [m]");
+  gen->add_option("--lat", sample->params.origin.latitude_deg, "Origin latitude [deg]");
+  gen->add_option("--lon", sample->params.origin.longitude_deg, "Origin longitude [deg]");
+  gen->add_option("--alt", sample->params.origin.altitude_m, "Origin height above WGS84 [m]");
+  gen->callback([sample] { RunSample(*sample); });
+
+  auto info_path = std::make_shared<std::string>();
+  CLI::App* info = map->add_subcommand("info", "Read, validate and describe a row map");
+  info->add_option("file", *info_path, "GeoJSON row map")->required();
+  info->callback([info_path] { RunInfo(*info_path); });
+}
+
+}  // namespace rowloc::apps

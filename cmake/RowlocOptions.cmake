@@ -1,0 +1,23 @@
+# Compiler flags shared by every rowloc target, carried by the interface target rowloc_options.
+find_program(ROWLOC_CCACHE ccache)
+if(ROWLOC_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${ROWLOC_CCACHE})
+  set(CMAKE_C_COMPILER_LAUNCHER ${ROWLOC_CCACHE})
+endif()
+
+add_library(rowloc_options INTERFACE)
+target_compile_options(rowloc_options INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Woverloaded-virtual
+  -Wcast-align -Wdouble-promotion -Wimplicit-fallthrough)
+if(ROWLOC_WERROR)
+  target_compile_options(rowloc_options INTERFACE -Werror)
+endif()
+# Never -march=native: Debian's PCL is built for baseline x86-64 and a different Eigen
+# alignment aborts at run time (docs/building.md).
+if(ROWLOC_SANITIZE)
+  set(_san -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  target_compile_options(rowloc_options INTERFACE ${_san})
+  target_link_options(rowloc_options INTERFACE ${_san})
+  # Required with PCL under ASan, or "free on address which was not malloc()-ed".
+  target_compile_definitions(rowloc_options INTERFACE EIGEN_MALLOC_ALREADY_ALIGNED=1)
+endif()

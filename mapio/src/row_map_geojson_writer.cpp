@@ -1,0 +1,155 @@
+// Writer of row map GeoJSON files (docs/map-format.md): validation, conversion of every vertex
+// from the local ENU plane (z = 0) to WGS84 with mapio::LocalFrame, one Feature per line, and an
+// atomic replace of the target file (write a temporary file, fsync, rename(2)).
+#include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/row_map_geojson.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <system_error>
+
+namespace rowloc::mapio {
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;  // keeps "type" first, as GeoJSON files usually do
+
+OrderedJson RowlocMember(const geometry::GeoOrigin& origin) {
+  return OrderedJson{{"format_version", kRowMapFormatVersion},
+                     {"origin",
+                      {{"latitude_deg", origin.latitude_deg},
+                       {"longitude_deg", origin.longitude_deg},
+                       {"altitude_m", origin.altitude_m}}}};
+}
+
+/// value rounded to a multiple of 10^-decimals; prints as the short decimal (the division of two
+/// exact integers is correctly rounded, so the result is the double nearest to that decimal).
+double RoundToDecimals(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
+}
+
+/// Decimals written: 1e-12 deg is 0.11 um on the ground and 1e-6 m of altitude moves a point of
+/// the tangent plane sideways by far less, so the rounding error stays under 1e-7 m (the format
+/// promises 1e-6 m) while the file stays readable.
+constexpr int kDegreeDecimals = 12;
+constexpr int kAltitudeDecimals = 6;
+
+/// [longitude, latitude, altitude] of the tangent-plane point (x, y, 0). Writing the altitude of
+/// the plane (not the origin's) makes the reader's ToEnu return (x, y, ~0).
+OrderedJson PositionJson(const Eigen::Vector2d& point_m, const LocalFrame& frame) {
+  const geometry::GeoOrigin g = frame.ToGeodetic(Eigen::Vector3d(point_m.x(), point_m.y(), 0.0));
+  return OrderedJson::array({RoundToDecimals(g.longitude_deg, kDegreeDecimals),
+                             RoundToDecimals(g.latitude_deg, kDegreeDecimals),
+                             RoundToDecimals(g.altitude_m, kAltitudeDecimals)});
+}
+
+OrderedJson FeatureJson(const geometry::Row& row, const LocalFrame& frame) {
+  OrderedJson positions = OrderedJson::array();
+  for (const Eigen::Vector2d& p : row.points_m) {
+    positions.push_back(PositionJson(p, frame));
+    const std::size_t n = positions.size();
+    const bool closing = row.closed && n == row.points_m.size();
+    if ((n > 1 && positions[n - 1] == positions[n - 2]) || (closing && positions[n - 1] == positions[0])) {
+      // ValidateRowMap only rejects exactly zero-length segments; the reader would reject these.
+      throw std::invalid_argument("FormatRowMapGeoJson: row '" + row.id + "': vertex " + std::to_string(n - 1) +
+                                  " is too close to its neighbour to be told apart in the file (1e-12 deg)");
+    }
+  }
+  OrderedJson geometry;
+  if (row.closed) {
+    positions.push_back(positions.front());  // RFC 7946 §3.1.6: the ring repeats its first position
+    geometry = OrderedJson{{"type", "Polygon"}, {"coordinates", OrderedJson::array({positions})}};
+  } else {
+    geometry = OrderedJson{{"type", "LineString"}, {"coordinates", positions}};
+  }
+  return OrderedJson{{"type", "Feature"}, {"properties", {{"id", row.id}}}, {"geometry", geometry}};
+}
+
+[[noreturn]] void ThrowSystemError(int error, const std::string& what) {
+  throw std::system_error(error, std::generic_category(), what);
+}
+
+void WriteAll(int fd, const std::string& bytes, const std::string& name) {
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      ThrowSystemError(errno, "cannot write " + name);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+/// Creates a new file next to target (same file system, so that rename(2) is atomic).
+std::pair<int, std::filesystem::path> CreateTemporaryNextTo(const std::filesystem::path& target) {
+  std::random_device random;
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    std::filesystem::path temp = target;
+    temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(random());
+    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd >= 0) return {fd, temp};
+    if (errno != EEXIST) ThrowSystemError(errno, "cannot create a temporary file next to " + target.string());
+  }
+  ThrowSystemError(EEXIST, "cannot create a temporary file next to " + target.string());
+}
+
+/// Makes the rename durable (best effort: the file is already complete and in place).
+void SyncDirectoryOf(const std::filesystem::path& path) {
+  const std::filesystem::path directory = path.has_parent_path() ? path.parent_path() : ".";
+  const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+std::string FormatRowMapGeoJson(const geometry::RowMap& map) {
+  if (const auto problem = geometry::ValidateRowMap(map)) {
+    throw std::invalid_argument("FormatRowMapGeoJson: invalid row map: " + *problem);
+  }
+  const LocalFrame frame(map.origin);
+  std::string text = "{\n\"type\": \"FeatureCollection\",\n\"rowloc\": " + RowlocMember(map.origin).dump() +
+                     ",\n\"features\": [\n";
+  for (std::size_t r = 0; r < map.rows.size(); ++r) {
+    try {
+      text += FeatureJson(map.rows[r], frame).dump();  // may throw std::invalid_argument
+    } catch (const nlohmann::json::type_error& e) {  // 316: a string that is not valid UTF-8
+      throw std::invalid_argument("FormatRowMapGeoJson: row " + std::to_string(r) +
+                                  ": id is not valid UTF-8 (" + e.what() + ")");
+    }
+    text += r + 1 < map.rows.size() ? ",\n" : "\n";
+  }
+  text += "]\n}\n";
+  return text;
+}
+
+void WriteRowMapGeoJson(const geometry::RowMap& map, const std::filesystem::path& path) {
+  const std::string text = FormatRowMapGeoJson(map);  // throws before anything touches the disk
+  const auto [fd, temp] = CreateTemporaryNextTo(path);
+  try {
+    WriteAll(fd, text, temp.string());
+    if (::fsync(fd) != 0) ThrowSystemError(errno, "cannot flush " + temp.string());
+    if (::close(fd) != 0) ThrowSystemError(errno, "cannot close " + temp.string());
+  } catch (...) {
+    ::close(fd);  // may fail with EBADF after a failed close: harmless
+    ::unlink(temp.c_str());
+    throw;
+  }
+  if (::rename(temp.c_str(), path.c_str()) != 0) {
+    const int error = errno;
+    ::unlink(temp.c_str());
+    ThrowSystemError(error, "cannot replace " + path.string());
+  }
+  SyncDirectoryOf(path);
+}
+
+}  // namespace rowloc::mapio

@@ -1,0 +1,53 @@
+// Survey point clouds: an in-memory cloud of 3-D points in local metres, and its PLY / PCD files
+// (SPEC §5, input of the mapping pipeline).
+//
+// Files are parsed and written by PCL (pcl::io::loadPLYFile / loadPCDFile, PLYWriter / PCDWriter);
+// only the x, y, z fields are read, as float or double, whatever other fields the file carries.
+// Files are written binary with double-precision x, y, z, so a write/read round trip is exact.
+//
+// Non-finite points are rejected, not dropped: a survey cloud with NaN or infinite coordinates is
+// corrupt (or an organized sensor frame, which is not a survey), and dropping points silently would
+// hide that. The error says how many of the points are non-finite.
+//
+// This header exposes Eigen and the standard library only; PCL stays in point_cloud.cpp.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rowloc::mapping {
+
+/// A point cloud in a local metric frame (e.g. ENU metres around a stated origin).
+struct PointCloud {
+  std::vector<Eigen::Vector3d> points_m;  ///< point positions, metres
+};
+
+/// A point cloud file could not be read or written. what() names the file and the reason.
+class PointCloudError : public std::runtime_error {
+ public:
+  PointCloudError(const std::filesystem::path& path, const std::string& reason);
+  const std::filesystem::path& path() const { return path_; }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::filesystem::path path_;
+  std::string reason_;
+};
+
+/// Reads a point cloud, by extension (case-insensitive): ".ply" (ASCII or binary) or ".pcd"
+/// (ASCII, binary or binary_compressed). Only the x, y, z fields are kept.
+/// Throws PointCloudError if the file is missing or not a regular file, the extension is unknown,
+/// PCL cannot parse it, it has no x/y/z float fields, it holds no points, or any point has a
+/// non-finite coordinate (the message gives the count).
+PointCloud ReadPointCloud(const std::filesystem::path& path);
+
+/// Writes a point cloud as binary PLY or binary PCD (by extension, case-insensitive), with x, y, z
+/// as double. Throws PointCloudError on unknown extension, empty cloud, non-finite points (count
+/// in the message) or a write failure (e.g. missing directory).
+void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path);
+
+}  // namespace rowloc::mapping

@@ -1,0 +1,143 @@
+// Canopy occupancy map through OctoMap (see canopy_occupancy_map.hpp).
+#include "rowloc/mapping/canopy_occupancy_map.hpp"
+
+#include <octomap/OcTree.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+namespace rowloc::mapping {
+namespace {
+
+/// Per-axis half-extent of the octree (keys are 16-bit, centred on 32768), in voxels.
+constexpr double kHalfExtentVoxels = 32768.0;
+
+std::string Describe(const Eigen::Vector3d& p) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return out.str();
+}
+
+void ValidateResolution(double resolution_m) {
+  if (!(resolution_m >= kMinResolutionM && resolution_m <= kMaxResolutionM)) {
+    std::ostringstream out;
+    out << "OctoMap resolution_m must be in [" << kMinResolutionM << ", " << kMaxResolutionM
+        << "] m, got " << resolution_m;
+    throw std::invalid_argument(out.str());
+  }
+}
+
+/// True if every coordinate of p maps to a valid 16-bit key at this resolution. Checked in double
+/// before OctoMap converts to int, so that far-away points never overflow that conversion.
+bool InOctreeRange(const Eigen::Vector3d& p, double resolution_m) {
+  const double half_extent_m = kHalfExtentVoxels * resolution_m;
+  return (p.array() >= -half_extent_m).all() && (p.array() < half_extent_m).all();
+}
+
+/// Occupied voxels at the finest depth, and the box they cover.
+struct OccupiedExtent {
+  std::size_t voxels = 0;
+  Eigen::Vector3d min_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d max_m = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+};
+
+OccupiedExtent MeasureOccupied(const octomap::OcTree& tree) {
+  OccupiedExtent extent;
+  const unsigned max_depth = tree.getTreeDepth();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    extent.voxels += std::size_t{1} << (3 * (max_depth - it.getDepth()));
+    const Eigen::Vector3d centre(it.getX(), it.getY(), it.getZ());
+    const double half = it.getSize() / 2.0;
+    extent.min_m = extent.min_m.cwiseMin((centre.array() - half).matrix());
+    extent.max_m = extent.max_m.cwiseMax((centre.array() + half).matrix());
+  }
+  return extent;
+}
+
+}  // namespace
+
+OccupancyMapError::OccupancyMapError(const std::filesystem::path& path, const std::string& reason)
+    : std::runtime_error("occupancy map '" + path.string() + "': " + reason) {}
+
+OctoMapSummary WriteOctoMap(const PointCloud& cloud, const OctoMapOptions& options,
+                            const std::filesystem::path& bt_path) {
+  ValidateResolution(options.resolution_m);
+  if (cloud.points_m.empty()) throw std::invalid_argument("WriteOctoMap: the cloud has no points");
+  octomap::OcTree tree(options.resolution_m);
+  for (std::size_t i = 0; i < cloud.points_m.size(); ++i) {
+    const Eigen::Vector3d& p = cloud.points_m[i];
+    if (!p.allFinite()) {
+      throw std::invalid_argument("WriteOctoMap: point " + std::to_string(i) + " is not finite");
+    }
+    octomap::OcTreeKey key;
+    if (!InOctreeRange(p, options.resolution_m) || !tree.coordToKeyChecked(p.x(), p.y(), p.z(), key)) {
+      throw std::invalid_argument("WriteOctoMap: point " + std::to_string(i) + " " + Describe(p) +
+                                  " is outside the octree range (+-32768 voxels per axis)");
+    }
+    tree.updateNode(key, /*occupied=*/true);
+  }
+  // writeBinary() converts to maximum likelihood and prunes before writing.
+  if (!tree.writeBinary(bt_path.string())) {
+    throw OccupancyMapError(bt_path, "OctoMap could not write the file");
+  }
+  const OccupiedExtent extent = MeasureOccupied(tree);
+  return OctoMapSummary{extent.voxels, tree.getResolution(), extent.min_m, extent.max_m};
+}
+
+struct CanopyOccupancyMap::Impl {
+  explicit Impl(double resolution_m) : tree(resolution_m) {}
+  octomap::OcTree tree;
+  std::size_t occupied_voxels = 0;
+};
+
+CanopyOccupancyMap::CanopyOccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+CanopyOccupancyMap::~CanopyOccupancyMap() = default;
+CanopyOccupancyMap::CanopyOccupancyMap(CanopyOccupancyMap&&) noexcept = default;
+CanopyOccupancyMap& CanopyOccupancyMap::operator=(CanopyOccupancyMap&&) noexcept = default;
+
+CanopyOccupancyMap CanopyOccupancyMap::Load(const std::filesystem::path& bt_path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(bt_path, ec)) {
+    throw OccupancyMapError(bt_path, "no such file");
+  }
+  auto impl = std::make_unique<Impl>(0.1);  // readBinary() replaces the resolution
+  if (!impl->tree.readBinary(bt_path.string())) {
+    throw OccupancyMapError(bt_path, "not a valid binary OctoMap (.bt) file");
+  }
+  const double resolution_m = impl->tree.getResolution();
+  if (!(resolution_m >= kMinResolutionM && resolution_m <= kMaxResolutionM)) {
+    throw OccupancyMapError(bt_path, "resolution out of range");
+  }
+  impl->occupied_voxels = MeasureOccupied(impl->tree).voxels;
+  return CanopyOccupancyMap(std::move(impl));
+}
+
+const CanopyOccupancyMap::Impl& CanopyOccupancyMap::impl() const {
+  if (!impl_) throw std::logic_error("CanopyOccupancyMap used after being moved from");
+  return *impl_;
+}
+
+bool CanopyOccupancyMap::IsOccupied(const Eigen::Vector3d& point_m) const {
+  const octomap::OcTree& tree = impl().tree;
+  if (!point_m.allFinite()) {
+    throw std::invalid_argument("CanopyOccupancyMap::IsOccupied: non-finite point " +
+                                Describe(point_m));
+  }
+  octomap::OcTreeKey key;
+  if (!InOctreeRange(point_m, tree.getResolution()) ||
+      !tree.coordToKeyChecked(point_m.x(), point_m.y(), point_m.z(), key)) {
+    return false;
+  }
+  const octomap::OcTreeNode* node = tree.search(key);
+  return node != nullptr && tree.isNodeOccupied(node);
+}
+
+double CanopyOccupancyMap::resolution_m() const { return impl().tree.getResolution(); }
+
+std::size_t CanopyOccupancyMap::occupied_leaves() const { return impl().occupied_voxels; }
+
+}  // namespace rowloc::mapping

@@ -1,0 +1,230 @@
+// PLY / PCD reading and writing through PCL (see point_cloud.hpp).
+#include "rowloc/mapping/point_cloud.hpp"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/PolygonMesh.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <optional>
+#include <string_view>
+#include <utility>
+
+namespace rowloc::mapping {
+namespace {
+
+enum class CloudFormat { kPly, kPcd };
+
+std::optional<CloudFormat> FormatOf(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".ply") return CloudFormat::kPly;
+  if (ext == ".pcd") return CloudFormat::kPcd;
+  return std::nullopt;
+}
+
+CloudFormat RequireFormat(const std::filesystem::path& path) {
+  const std::optional<CloudFormat> format = FormatOf(path);
+  if (!format) {
+    throw PointCloudError(path, "unknown extension '" + path.extension().string() +
+                                    "' (expected .ply or .pcd)");
+  }
+  return *format;
+}
+
+std::size_t CountNonFinite(const std::vector<Eigen::Vector3d>& points) {
+  return static_cast<std::size_t>(std::count_if(
+      points.begin(), points.end(), [](const Eigen::Vector3d& p) { return !p.allFinite(); }));
+}
+
+void RejectNonFinite(const std::vector<Eigen::Vector3d>& points, const std::filesystem::path& path) {
+  const std::size_t bad = CountNonFinite(points);
+  if (bad > 0) {
+    throw PointCloudError(path, std::to_string(bad) + " of " + std::to_string(points.size()) +
+                                    " points have non-finite (NaN or infinite) coordinates");
+  }
+}
+
+/// Reads one coordinate field of point i, stored as float or double.
+double ReadCoordinate(const pcl::PCLPointCloud2& blob, const pcl::PCLPointField& field,
+                      std::size_t i) {
+  const std::uint8_t* at = blob.data.data() + i * blob.point_step + field.offset;
+  if (field.datatype == pcl::PCLPointField::FLOAT64) {
+    double value = 0.0;
+    std::memcpy(&value, at, sizeof value);
+    return value;
+  }
+  float value = 0.0F;
+  std::memcpy(&value, at, sizeof value);
+  return static_cast<double>(value);
+}
+
+const pcl::PCLPointField& RequireCoordinateField(const pcl::PCLPointCloud2& blob,
+                                                 std::string_view name,
+                                                 const std::filesystem::path& path) {
+  const auto it = std::find_if(blob.fields.begin(), blob.fields.end(),
+                               [&](const pcl::PCLPointField& f) { return f.name == name; });
+  if (it == blob.fields.end()) {
+    throw PointCloudError(path, "no '" + std::string(name) + "' field");
+  }
+  if (it->datatype != pcl::PCLPointField::FLOAT32 && it->datatype != pcl::PCLPointField::FLOAT64) {
+    throw PointCloudError(path, "field '" + std::string(name) + "' is not float or double");
+  }
+  const std::size_t size = it->datatype == pcl::PCLPointField::FLOAT64 ? 8 : 4;
+  if (it->offset + size > blob.point_step) {
+    throw PointCloudError(path, "field '" + std::string(name) + "' lies outside the point record");
+  }
+  return *it;
+}
+
+std::vector<Eigen::Vector3d> ExtractPoints(const pcl::PCLPointCloud2& blob,
+                                           const std::filesystem::path& path) {
+  const pcl::PCLPointField& fx = RequireCoordinateField(blob, "x", path);
+  const pcl::PCLPointField& fy = RequireCoordinateField(blob, "y", path);
+  const pcl::PCLPointField& fz = RequireCoordinateField(blob, "z", path);
+  const std::size_t count = std::size_t{blob.width} * std::size_t{blob.height};
+  if (blob.data.size() < count * blob.point_step) {
+    throw PointCloudError(path, "PCL returned less data than the point count announces");
+  }
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    points.emplace_back(ReadCoordinate(blob, fx, i), ReadCoordinate(blob, fy, i),
+                        ReadCoordinate(blob, fz, i));
+  }
+  return points;
+}
+
+constexpr const char* kNoPoints = "the file holds no points";
+
+[[noreturn]] void ThrowParseFailure(const std::filesystem::path& path, int status) {
+  throw PointCloudError(path, "PCL could not parse the file (status " + std::to_string(status) + ")");
+}
+
+/// PLY through pcl::io::loadPLYFile into a PolygonMesh: unlike the PCLPointCloud2 overload, it
+/// accepts files that also carry faces (meshes), whose vertices are then read as the points.
+pcl::PCLPointCloud2 LoadPly(const std::filesystem::path& path) {
+  pcl::PolygonMesh mesh;
+  int status = -1;
+  try {
+    status = pcl::io::loadPLYFile(path.string(), mesh);
+  } catch (const std::exception& e) {
+    throw PointCloudError(path, std::string("PCL could not parse the file: ") + e.what());
+  }
+  if (status < 0) ThrowParseFailure(path, status);
+  return std::move(mesh.cloud);
+}
+
+/// PCD through pcl::io::loadPCDFile, after checking the header with PCDReader::readHeader: PCL
+/// 1.13 only warns about a header without points or fields and then crashes reading the body
+/// (segmentation fault on garbage input), and without a DATA line it silently reads the header
+/// text as points, so such files are rejected first.
+pcl::PCLPointCloud2 LoadPcd(const std::filesystem::path& path) {
+  try {
+    pcl::PCDReader reader;
+    pcl::PCLPointCloud2 header;
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0;
+    int data_type = 0;          // 0 ascii, 1 binary, 2 binary_compressed
+    unsigned int data_index = 0;  // offset of the body: 0 if the header has no DATA line
+    const int status =
+        reader.readHeader(path.string(), header, origin, orientation, version, data_type, data_index);
+    if (status < 0) ThrowParseFailure(path, status);
+    // Without a DATA line PCL reads the header text itself as ASCII points (all zeros).
+    if (data_index == 0) throw PointCloudError(path, "PCD header has no DATA line");
+    for (const char* axis : {"x", "y", "z"}) RequireCoordinateField(header, axis, path);
+    if (std::size_t{header.width} * std::size_t{header.height} == 0) {
+      throw PointCloudError(path, kNoPoints);
+    }
+    pcl::PCLPointCloud2 blob;
+    const int read_status = pcl::io::loadPCDFile(path.string(), blob);
+    if (read_status < 0) ThrowParseFailure(path, read_status);
+    return blob;
+  } catch (const PointCloudError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw PointCloudError(path, std::string("PCL could not parse the file: ") + e.what());
+  }
+}
+
+pcl::PCLPointCloud2 ToBlob(const std::vector<Eigen::Vector3d>& points) {
+  pcl::PCLPointCloud2 blob;
+  constexpr std::uint32_t kCoordinateBytes = sizeof(double);
+  const char* names[3] = {"x", "y", "z"};
+  for (std::uint32_t axis = 0; axis < 3; ++axis) {
+    pcl::PCLPointField field;
+    field.name = names[axis];
+    field.offset = axis * kCoordinateBytes;
+    field.datatype = pcl::PCLPointField::FLOAT64;
+    field.count = 1;
+    blob.fields.push_back(field);
+  }
+  blob.point_step = 3 * kCoordinateBytes;
+  blob.width = static_cast<std::uint32_t>(points.size());
+  blob.height = 1;
+  blob.row_step = blob.point_step * blob.width;
+  blob.is_bigendian = false;
+  blob.is_dense = true;
+  blob.data.resize(std::size_t{blob.row_step});
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    std::memcpy(blob.data.data() + i * blob.point_step, points[i].data(), blob.point_step);
+  }
+  return blob;
+}
+
+}  // namespace
+
+PointCloudError::PointCloudError(const std::filesystem::path& path, const std::string& reason)
+    : std::runtime_error("point cloud '" + path.string() + "': " + reason),
+      path_(path),
+      reason_(reason) {}
+
+PointCloud ReadPointCloud(const std::filesystem::path& path) {
+  const CloudFormat format = RequireFormat(path);
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw PointCloudError(path, "no such file");
+  if (!std::filesystem::is_regular_file(path, ec)) throw PointCloudError(path, "not a regular file");
+
+  const pcl::PCLPointCloud2 blob = format == CloudFormat::kPly ? LoadPly(path) : LoadPcd(path);
+  PointCloud cloud{ExtractPoints(blob, path)};
+  if (cloud.points_m.empty()) throw PointCloudError(path, kNoPoints);
+  RejectNonFinite(cloud.points_m, path);
+  return cloud;
+}
+
+void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path) {
+  const CloudFormat format = RequireFormat(path);
+  if (cloud.points_m.empty()) throw PointCloudError(path, "refusing to write an empty cloud");
+  RejectNonFinite(cloud.points_m, path);
+  if (cloud.points_m.size() > std::size_t{UINT32_MAX} / (3 * sizeof(double))) {
+    throw PointCloudError(path, "too many points for one PCL cloud");
+  }
+  const pcl::PCLPointCloud2 blob = ToBlob(cloud.points_m);
+  int status = -1;
+  try {
+    if (format == CloudFormat::kPly) {
+      pcl::PLYWriter writer;
+      status = writer.writeBinary(path.string(), blob, Eigen::Vector4f::Zero(),
+                                  Eigen::Quaternionf::Identity(), /*use_camera=*/false);
+    } else {
+      pcl::PCDWriter writer;
+      status = writer.writeBinary(path.string(), blob);
+    }
+  } catch (const std::exception& e) {
+    throw PointCloudError(path, std::string("PCL could not write the file: ") + e.what());
+  }
+  if (status < 0) {
+    throw PointCloudError(path, "PCL could not write the file (status " + std::to_string(status) +
+                                    ")");
+  }
+}
+
+}  // namespace rowloc::mapping

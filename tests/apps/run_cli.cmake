@@ -1,0 +1,21 @@
+# Runs a command-line program and checks its exit status and output.
+#   cmake -DCOMMAND="prog;arg;..." -DEXPECT_SUCCESS=ON|OFF [-DEXPECT_OUTPUT=regex]
+#         [-DCOMPARE_FILES="a;b"] -P run_cli.cmake
+execute_process(COMMAND ${COMMAND} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}${err}")
+if(EXPECT_SUCCESS AND NOT status EQUAL 0)
+  message(FATAL_ERROR "expected success, exit status ${status}")
+elseif(NOT EXPECT_SUCCESS AND status EQUAL 0)
+  message(FATAL_ERROR "expected a failure, got exit status 0")
+endif()
+if(DEFINED EXPECT_OUTPUT AND NOT "${out}${err}" MATCHES "${EXPECT_OUTPUT}")
+  message(FATAL_ERROR "output does not match: ${EXPECT_OUTPUT}")
+endif()
+if(DEFINED COMPARE_FILES)
+  list(GET COMPARE_FILES 0 a)
+  list(GET COMPARE_FILES 1 b)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E compare_files ${a} ${b} RESULT_VARIABLE differ)
+  if(NOT differ EQUAL 0)
+    message(FATAL_ERROR "${a} and ${b} differ")
+  endif()
+endif()
