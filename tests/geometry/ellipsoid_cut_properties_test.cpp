@@ -8,6 +8,8 @@
 #include <Eigen/LU>
 #include <gtest/gtest.h>
 
+#include "random_spd.hpp"
+
 #include <cmath>
 #include <limits>
 #include <random>
@@ -43,10 +45,7 @@ std::string Describe(int n, const CutCase& c) {
 }
 
 Eigen::MatrixXd RandomSpd(Eigen::Index n, std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::MatrixXd a(n, n);
-  for (Eigen::Index i = 0; i < a.size(); ++i) a(i) = normal(rng);
-  return a * a.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  return test::RandomSpd(n, rng, 0.1);
 }
 
 /// A random ellipsoid and a random normal with |g| != 1 and g^T P g != 1 (so that dividing the

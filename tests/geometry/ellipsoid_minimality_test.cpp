@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include "random_spd.hpp"
+
 #include <cmath>
 #include <random>
 #include <string>
@@ -45,10 +47,7 @@ TEST(MinVolumeReferenceTest, SymmetricSlabKnownAnswers) {
 }
 
 Eigen::MatrixXd RandomSpd(Eigen::Index n, std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::MatrixXd a(n, n);
-  for (Eigen::Index i = 0; i < a.size(); ++i) a(i) = normal(rng);
-  return a * a.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  return test::RandomSpd(n, rng, 0.1);
 }
 
 /// Depth pairs (alpha, alpha_hat); alpha_hat = -1 is a deep cut, (0, -1) the central cut.

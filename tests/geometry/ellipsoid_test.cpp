@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include "random_spd.hpp"
+
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -22,10 +24,7 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// A random symmetric positive definite matrix with strong correlations.
 Eigen::MatrixXd RandomSpd(Eigen::Index n, std::mt19937_64& rng) {
-  std::normal_distribution<double> normal;
-  Eigen::MatrixXd a(n, n);
-  for (Eigen::Index i = 0; i < a.size(); ++i) a(i) = normal(rng);
-  return a * a.transpose() + 0.05 * Eigen::MatrixXd::Identity(n, n);
+  return test::RandomSpd(n, rng, 0.05);
 }
 
 TEST(EllipsoidTest, StoresCenterAndShapeAndFactor) {
