@@ -57,7 +57,7 @@ struct RowMap {
 /// reflecting segments, which is all that localization needs).
 std::optional<std::string> ValidateRowMap(const RowMap& map);
 
-/// Parameters of the synthetic sample map shipped in maps/ (see docs/maps.md).
+/// Parameters of the synthetic sample map shipped in maps/ (see docs/map-format.md, "The sample map").
 struct SampleRowMapParams {
   int row_count = 10;               ///< number of rows
   double row_spacing_m = 2.5;       ///< distance between neighbouring row centre lines
