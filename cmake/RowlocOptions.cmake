@@ -1,8 +1,10 @@
 # Compiler flags shared by every rowloc target, carried by the interface target rowloc_options.
 find_program(ROWLOC_CCACHE ccache)
 if(ROWLOC_CCACHE AND NOT CMAKE_CXX_COMPILER_LAUNCHER)
-  set(CMAKE_CXX_COMPILER_LAUNCHER ${ROWLOC_CCACHE})
-  set(CMAKE_C_COMPILER_LAUNCHER ${ROWLOC_CCACHE})
+  # CCACHE_BASEDIR makes paths relative, so that fresh clones (CI) hit the cache of earlier ones.
+  set(_launcher ${CMAKE_COMMAND} -E env CCACHE_BASEDIR=${PROJECT_SOURCE_DIR} ${ROWLOC_CCACHE})
+  set(CMAKE_CXX_COMPILER_LAUNCHER ${_launcher})
+  set(CMAKE_C_COMPILER_LAUNCHER ${_launcher})
 endif()
 
 add_library(rowloc_options INTERFACE)
