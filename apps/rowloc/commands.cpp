@@ -6,6 +6,9 @@ void RegisterCommands(CLI::App& app) {
   RegisterExampleCommand(app);
   RegisterMapCommands(app);
   RegisterMappingCommands(app);
+  RegisterWorldCommand(app);
+  RegisterSimulateCommand(app);
+  RegisterEvaluateCommand(app);
 }
 
 }  // namespace rowloc::apps

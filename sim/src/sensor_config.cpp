@@ -1,79 +1,22 @@
 // JSON loading of the sensor error-model profiles (format in sensor_config.hpp).
 #include "rowloc/sim/sensor_config.hpp"
 
-#include <nlohmann/json.hpp>
-
-#include <fstream>
-#include <set>
-#include <sstream>
+#include "json_object_reader.hpp"
 
 namespace rowloc::sim {
 namespace {
 
-using nlohmann::json;
+using Reader = detail::JsonObjectReader<SensorConfigError>;
 
-/// Reads the fields of one JSON object, remembering which were used so that unknown keys are
-/// reported; every error names the source and the full key path.
-class ObjectReader {
- public:
-  ObjectReader(const json& object, std::string source, std::string path)
-      : object_(object), source_(std::move(source)), path_(std::move(path)) {
-    if (!object_.is_object()) Fail(path_, std::string("must be an object, got ") + object_.type_name());
-  }
-
-  double Number(const std::string& key) {
-    const json& value = Get(key);
-    if (!value.is_number()) Fail(Key(key), std::string("must be a number, got ") + value.type_name());
-    return value.get<double>();
-  }
-
-  std::string String(const std::string& key) {
-    const json& value = Get(key);
-    if (!value.is_string()) Fail(Key(key), std::string("must be a string, got ") + value.type_name());
-    return value.get<std::string>();
-  }
-
-  ObjectReader Object(const std::string& key) { return ObjectReader(Get(key), source_, Key(key)); }
-
-  /// The raw value of a required key (marked as used).
-  const json& Value(const std::string& key) { return Get(key); }
-
-  /// Call after reading every field.
-  void RejectUnknownKeys() const {
-    for (const auto& item : object_.items()) {
-      if (!used_.contains(item.key())) Fail(Key(item.key()), "unknown key");
-    }
-  }
-
-  [[noreturn]] void Fail(const std::string& key_path, const std::string& reason) const {
-    throw SensorConfigError(source_ + ": " + (key_path.empty() ? "<root>" : key_path) + ": " + reason);
-  }
-  const std::string& path() const { return path_; }
-
- private:
-  std::string Key(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  const json& Get(const std::string& key) {
-    const auto it = object_.find(key);
-    if (it == object_.end()) Fail(Key(key), "missing key");
-    used_.insert(key);
-    return *it;
-  }
-
-  const json& object_;
-  std::string source_;
-  std::string path_;
-  std::set<std::string> used_;
-};
-
-GnssFixQuality ParseFixQuality(ObjectReader& reader, const std::string& key) {
+GnssFixQuality ParseFixQuality(Reader& reader, const std::string& key) {
   const std::string text = reader.String(key);
   if (text == "sbas") return GnssFixQuality::kSbas;
   if (text == "rtk_float") return GnssFixQuality::kRtkFloat;
   if (text == "rtk_fixed") return GnssFixQuality::kRtkFixed;
-  reader.Fail(reader.path() + "." + key, "must be one of \"sbas\", \"rtk_float\", \"rtk_fixed\", got \"" + text + "\"");
+  reader.Fail(reader.Key(key), "must be one of \"sbas\", \"rtk_float\", \"rtk_fixed\", got \"" + text + "\"");
 }
 
-GnssMarkovFaultConfig ParseFault(ObjectReader reader) {
+GnssMarkovFaultConfig ParseFault(Reader reader) {
   GnssMarkovFaultConfig fault;
   fault.onset_rate_open_per_s = reader.Number("onset_rate_open_per_s");
   fault.onset_rate_canopy_per_s = reader.Number("onset_rate_canopy_per_s");
@@ -82,7 +25,7 @@ GnssMarkovFaultConfig ParseFault(ObjectReader reader) {
   return fault;
 }
 
-GnssConfig ParseGnss(ObjectReader& reader) {
+GnssConfig ParseGnss(Reader& reader) {
   GnssConfig c;
   c.rate_hz = reader.Number("rate_hz");
   c.sigma_horizontal_m = reader.Number("sigma_horizontal_m");
@@ -96,7 +39,7 @@ GnssConfig ParseGnss(ObjectReader& reader) {
   return c;
 }
 
-ImuAxisConfig ParseImuAxis(ObjectReader reader) {
+ImuAxisConfig ParseImuAxis(Reader reader) {
   ImuAxisConfig axis;
   axis.noise_density = reader.Number("noise_density");
   axis.bias_random_walk = reader.Number("bias_random_walk");
@@ -105,7 +48,7 @@ ImuAxisConfig ParseImuAxis(ObjectReader reader) {
   return axis;
 }
 
-ImuConfig ParseImu(ObjectReader& reader) {
+ImuConfig ParseImu(Reader& reader) {
   ImuConfig c;
   c.rate_hz = reader.Number("rate_hz");
   c.accel_x = ParseImuAxis(reader.Object("accel_x"));
@@ -114,7 +57,7 @@ ImuConfig ParseImu(ObjectReader& reader) {
   return c;
 }
 
-WheelEncoderConfig ParseWheelEncoder(ObjectReader& reader) {
+WheelEncoderConfig ParseWheelEncoder(Reader& reader) {
   WheelEncoderConfig c;
   c.rate_hz = reader.Number("rate_hz");
   c.ticks_per_revolution = reader.Number("ticks_per_revolution");
@@ -123,7 +66,7 @@ WheelEncoderConfig ParseWheelEncoder(ObjectReader& reader) {
   return c;
 }
 
-SteeringEncoderConfig ParseSteeringEncoder(ObjectReader& reader) {
+SteeringEncoderConfig ParseSteeringEncoder(Reader& reader) {
   SteeringEncoderConfig c;
   c.rate_hz = reader.Number("rate_hz");
   c.quantization_step_rad = reader.Number("quantization_step_rad");
@@ -133,13 +76,11 @@ SteeringEncoderConfig ParseSteeringEncoder(ObjectReader& reader) {
 
 /// Parses and validates every profile of one sensor kind (root.<kind>.<name>) with parse(reader).
 template <typename Config, typename Parse>
-std::map<std::string, Config> ParseProfiles(ObjectReader& root, const std::string& source, const std::string& kind,
-                                            Parse parse) {
-  const json& kind_object = root.Value(kind);
-  ObjectReader check_is_object(kind_object, source, kind);
+std::map<std::string, Config> ParseProfiles(Reader& root, const std::string& kind, Parse parse) {
+  Reader kind_reader = root.Object(kind);
   std::map<std::string, Config> profiles;
-  for (const auto& item : kind_object.items()) {
-    ObjectReader reader(item.value(), source, kind + "." + item.key());
+  for (const std::string& name : kind_reader.Keys()) {
+    Reader reader = kind_reader.Object(name);
     Config config = parse(reader);
     reader.RejectUnknownKeys();
     try {
@@ -147,7 +88,7 @@ std::map<std::string, Config> ParseProfiles(ObjectReader& root, const std::strin
     } catch (const std::invalid_argument& e) {
       reader.Fail(reader.path(), e.what());
     }
-    profiles.emplace(item.key(), config);
+    profiles.emplace(name, config);
   }
   return profiles;
 }
@@ -166,29 +107,19 @@ const Config& FindProfile(const std::map<std::string, Config>& profiles, const s
 
 SensorProfiles ParseSensorProfiles(std::string_view json_text, std::string_view source_name) {
   const std::string source(source_name);
-  json document;
-  try {
-    document = json::parse(json_text);
-  } catch (const json::exception& e) {  // parse_error, and out_of_range for number overflow
-    throw SensorConfigError(source + ": invalid JSON: " + e.what());
-  }
-  ObjectReader root(document, source, "");
+  const nlohmann::json document = detail::ParseJsonText<SensorConfigError>(json_text, source);
+  Reader root(document, source, "");
   SensorProfiles profiles;
-  profiles.gnss = ParseProfiles<GnssConfig>(root, source, "gnss", ParseGnss);
-  profiles.imu = ParseProfiles<ImuConfig>(root, source, "imu", ParseImu);
-  profiles.wheel_encoder = ParseProfiles<WheelEncoderConfig>(root, source, "wheel_encoder", ParseWheelEncoder);
-  profiles.steering_encoder =
-      ParseProfiles<SteeringEncoderConfig>(root, source, "steering_encoder", ParseSteeringEncoder);
+  profiles.gnss = ParseProfiles<GnssConfig>(root, "gnss", ParseGnss);
+  profiles.imu = ParseProfiles<ImuConfig>(root, "imu", ParseImu);
+  profiles.wheel_encoder = ParseProfiles<WheelEncoderConfig>(root, "wheel_encoder", ParseWheelEncoder);
+  profiles.steering_encoder = ParseProfiles<SteeringEncoderConfig>(root, "steering_encoder", ParseSteeringEncoder);
   root.RejectUnknownKeys();
   return profiles;
 }
 
 SensorProfiles LoadSensorProfiles(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw SensorConfigError(path.string() + ": cannot open sensor profile file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseSensorProfiles(text.str(), path.string());
+  return ParseSensorProfiles(detail::ReadTextFile<SensorConfigError>(path, "sensor profile file"), path.string());
 }
 
 GnssConfig DefaultGnssRtkConfig() {

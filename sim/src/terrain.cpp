@@ -2,57 +2,32 @@
 
 #include "rowloc/sim/wheel_slip.hpp"
 
-#include <nlohmann/json.hpp>
+#include "json_object_reader.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstddef>
-#include <fstream>
-#include <span>
 #include <sstream>
 
 namespace rowloc::sim {
 namespace {
 
-constexpr std::array<std::string_view, 4> kFieldNames = {
+using Reader = detail::JsonObjectReader<TerrainConfigError>;
+
+constexpr std::array<const char*, 4> kFieldNames = {
     "traction_coefficient_max", "shear_slip_constant", "rolling_resistance_coefficient",
     "rolling_radius_factor"};
 
 std::size_t Index(TerrainClass terrain) { return static_cast<std::size_t>(terrain); }
 
-[[noreturn]] void Fail(const std::string& source, const std::string& key, const std::string& reason) {
-  throw TerrainConfigError(source + ": key '" + key + "': " + reason);
-}
-
-double ReadNumber(const nlohmann::json& object, std::string_view field, const std::string& source,
-                  const std::string& path) {
-  const std::string key = path + "." + std::string(field);
-  const auto it = object.find(std::string(field));
-  if (it == object.end()) Fail(source, key, "missing");
-  if (!it->is_number()) Fail(source, key, std::string("expected a number, got ") + it->type_name());
-  const double value = it->get<double>();
-  if (!std::isfinite(value)) Fail(source, key, "not finite");
-  return value;
-}
-
-void RejectUnknownKeys(const nlohmann::json& object, std::span<const std::string_view> known,
-                       const std::string& source, const std::string& path) {
-  for (const auto& item : object.items()) {
-    bool found = false;
-    for (const auto name : known) found = found || item.key() == name;
-    if (!found) Fail(source, path.empty() ? item.key() : path + "." + item.key(), "unknown key");
-  }
-}
-
-TerrainSlipParams ParseParams(const nlohmann::json& object, const std::string& source,
-                              const std::string& path) {
-  if (!object.is_object()) Fail(source, path, std::string("expected an object, got ") + object.type_name());
-  RejectUnknownKeys(object, kFieldNames, source, path);
+TerrainSlipParams ReadParams(Reader reader) {
+  reader.ExpectKeys(kFieldNames);  // a misspelt field is reported as unknown, not the right one as missing
   TerrainSlipParams params;
-  params.traction_coefficient_max = ReadNumber(object, kFieldNames[0], source, path);
-  params.shear_slip_constant = ReadNumber(object, kFieldNames[1], source, path);
-  params.rolling_resistance_coefficient = ReadNumber(object, kFieldNames[2], source, path);
-  params.rolling_radius_factor = ReadNumber(object, kFieldNames[3], source, path);
-  if (const auto problem = TerrainSlipParamsProblem(params)) Fail(source, path, *problem);
+  params.traction_coefficient_max = reader.Number(kFieldNames[0]);
+  params.shear_slip_constant = reader.Number(kFieldNames[1]);
+  params.rolling_resistance_coefficient = reader.Number(kFieldNames[2]);
+  params.rolling_radius_factor = reader.Number(kFieldNames[3]);
+  if (const auto problem = TerrainSlipParamsProblem(params)) reader.Fail(reader.path(), *problem);
   return params;
 }
 
@@ -128,37 +103,22 @@ const TerrainSlipParams& TerrainSlipTable::At(TerrainClass terrain) const {
 }
 
 TerrainSlipTable ParseTerrainSlipTable(const std::string& json_text, const std::string& source_name) {
-  nlohmann::json root;
-  try {
-    root = nlohmann::json::parse(json_text);
-  } catch (const nlohmann::json::exception& error) {  // parse errors and number overflow
-    Fail(source_name, "(document)", std::string("invalid JSON: ") + error.what());
-  }
-  if (!root.is_object()) Fail(source_name, "(document)", "expected a JSON object");
-  constexpr std::array<std::string_view, 1> kRootKeys = {"terrains"};
-  RejectUnknownKeys(root, kRootKeys, source_name, "");
-  const auto terrains = root.find("terrains");
-  if (terrains == root.end()) Fail(source_name, "terrains", "missing");
-  if (!terrains->is_object()) Fail(source_name, "terrains", "expected an object");
-  for (const auto& item : terrains->items()) {
-    if (!TerrainClassFromName(item.key())) Fail(source_name, "terrains." + item.key(), "unknown terrain class");
+  const nlohmann::json document = detail::ParseJsonText<TerrainConfigError>(json_text, source_name);
+  Reader root(document, source_name, "");
+  root.ExpectKeys({"terrains"});
+  Reader terrains = root.Object("terrains");
+  for (const std::string& name : terrains.Keys()) {
+    if (!TerrainClassFromName(name)) terrains.Fail(terrains.Key(name), "unknown terrain class");
   }
   TerrainSlipTable table;
   for (const auto terrain : kAllTerrainClasses) {
-    const std::string name(TerrainClassName(terrain));
-    const auto entry = terrains->find(name);
-    if (entry == terrains->end()) Fail(source_name, "terrains." + name, "missing");
-    table.Set(terrain, ParseParams(*entry, source_name, "terrains." + name));
+    table.Set(terrain, ReadParams(terrains.Object(std::string(TerrainClassName(terrain)))));
   }
   return table;
 }
 
 TerrainSlipTable LoadTerrainSlipTable(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) Fail(path.string(), "(document)", "cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseTerrainSlipTable(text.str(), path.string());
+  return ParseTerrainSlipTable(detail::ReadTextFile<TerrainConfigError>(path, "terrain file"), path.string());
 }
 
 }  // namespace rowloc::sim

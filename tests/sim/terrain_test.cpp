@@ -140,7 +140,7 @@ TEST(TerrainSlipTableParseTest, MissingTerrainClass) {
 
 TEST(TerrainSlipTableParseTest, WrongTypeNaNAndNegative) {
   EXPECT_THAT(ErrorOf(ValidJsonWith(R"("shear_slip_constant": 0.1)", R"("shear_slip_constant": "0.1")")),
-              AllOf(HasSubstr("terrains.tiles.shear_slip_constant"), HasSubstr("expected a number")));
+              AllOf(HasSubstr("terrains.tiles.shear_slip_constant"), HasSubstr("must be a number, got string")));
   EXPECT_THAT(ErrorOf(ValidJsonWith(R"("shear_slip_constant": 0.1)", R"("shear_slip_constant": -0.1)")),
               AllOf(HasSubstr("terrains.tiles"), HasSubstr("shear_slip_constant must be finite and > 0")));
   // JSON has no NaN literal: "NaN" is a parse error; a number too large for a double is infinite.
@@ -148,8 +148,8 @@ TEST(TerrainSlipTableParseTest, WrongTypeNaNAndNegative) {
               HasSubstr("invalid JSON"));
   EXPECT_THAT(ErrorOf(ValidJsonWith(R"("shear_slip_constant": 0.1)", R"("shear_slip_constant": 1e999)")),
               HasSubstr("test.json"));
-  EXPECT_THAT(ErrorOf(R"({"terrains": 5})"), AllOf(HasSubstr("terrains"), HasSubstr("expected an object")));
-  EXPECT_THAT(ErrorOf("[1, 2]"), HasSubstr("expected a JSON object"));
+  EXPECT_THAT(ErrorOf(R"({"terrains": 5})"), AllOf(HasSubstr("terrains"), HasSubstr("must be an object, got number")));
+  EXPECT_THAT(ErrorOf("[1, 2]"), AllOf(HasSubstr("test.json"), HasSubstr("must be an object, got array")));
 }
 
 TEST(TerrainSlipTableParseTest, MissingFileIsReported) {

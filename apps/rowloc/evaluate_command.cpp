@@ -1,0 +1,110 @@
+// `rowloc evaluate TRUTH ESTIMATES -o REPORT_DIR`: compares an estimate stream with the ground
+// truth (docs/protocol.md §2-3) and writes report.txt, report.json and plots/ (docs/validation.md).
+// Errors (unreadable or malformed input, an estimate outside the truth's span) exit with status 2.
+#include "commands.hpp"
+
+#include "rowloc/geometry/segment_index.hpp"
+#include "rowloc/mapio/row_map_geojson.hpp"
+#include "rowloc/sim/evaluation_report.hpp"
+#include "rowloc/sim/metrics.hpp"
+#include "rowloc/sim/report_plots.hpp"
+#include "rowloc/sim/trajectory_streams.hpp"
+
+#include <fmt/format.h>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <exception>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace rowloc::apps {
+namespace {
+
+constexpr int kInputErrorExitCode = 2;
+
+struct EvaluateOptions {
+  std::string truth_path;
+  std::string estimates_path;
+  std::string output_dir;
+  std::string map_path;
+  std::size_t max_lag = 50;
+  double drift_min_duration_s = 5.0;
+  sim::PlotOptions plot;
+  bool no_plots = false;
+  bool json = false;
+};
+
+sim::LineProgress ProgressFor(const std::string& path) {
+  return [path](std::size_t lines) { spdlog::info("{}: {} lines read", path, lines); };
+}
+
+void MakePlots(const EvaluateOptions& o, const sim::EvaluationResult& result, const sim::TruthStream& truth,
+               const sim::EstimateStream& estimates, const std::optional<geometry::RowMap>& map) {
+  const sim::PlotFiles files = sim::WritePlotFiles(result, truth, estimates, map,
+                                                   std::filesystem::path(o.output_dir) / "plots", o.plot);
+  const sim::GnuplotRun run = sim::RunGnuplot(files);
+  if (!run.ran || run.exit_code != 0) {
+    spdlog::warn("plots not drawn: {}", run.message);
+    return;
+  }
+  for (const std::string& svg : files.svg_files) spdlog::info("plot: {}", (files.directory / svg).string());
+}
+
+void RunEvaluate(const EvaluateOptions& o) {
+  if (o.json) spdlog::set_default_logger(spdlog::stderr_color_mt("rowloc-evaluate"));  // stdout is for JSON
+  const sim::TruthStream truth = sim::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
+  spdlog::info("{}: {} truth samples", o.truth_path, truth.samples.size());
+  const sim::EstimateStream estimates = sim::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
+  spdlog::info("{}: {} estimates, {} updates", o.estimates_path, estimates.estimates.size(), estimates.updates.size());
+  std::optional<geometry::RowMap> map;
+  sim::EvaluationOptions options;
+  options.max_lag = o.max_lag;
+  options.drift_min_duration_s = o.drift_min_duration_s;
+  if (!o.map_path.empty()) {
+    map = mapio::ReadRowMapGeoJson(o.map_path);
+    options.rows = geometry::SegmentIndex::FromRowMap(*map);
+  }
+  const sim::EvaluationResult result = sim::Evaluate(truth, estimates, options);
+  const sim::ReportInputs inputs{o.truth_path, o.estimates_path, o.map_path, estimates.updates.size(),
+                                 truth.skipped_lines, estimates.skipped_lines};
+  sim::WriteReport(result, inputs, o.output_dir);
+  if (o.json) {
+    fmt::print("{}", sim::FormatReportJson(result, inputs));
+  } else {
+    fmt::print("{}", sim::FormatReportText(result, inputs));
+  }
+  spdlog::info("report: {}/report.txt, {}/report.json", o.output_dir, o.output_dir);
+  if (!o.no_plots) MakePlots(o, result, truth, estimates, map);
+}
+
+}  // namespace
+
+void RegisterEvaluateCommand(CLI::App& app) {
+  auto o = std::make_shared<EvaluateOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "evaluate", "Compare estimates with the ground truth: error, NEES/NIS, whiteness, drift, slip (report + plots)");
+  cmd->add_option("truth", o->truth_path, "Ground-truth stream (NDJSON, docs/protocol.md §2)")->required();
+  cmd->add_option("estimates", o->estimates_path, "Estimate stream (NDJSON, docs/protocol.md §3)")->required();
+  cmd->add_option("-o,--output", o->output_dir, "Report directory (report.txt, report.json, plots/)")->required();
+  cmd->add_option("--map", o->map_path, "Row map (GeoJSON): along/across relative to the rows, rows in the plot");
+  cmd->add_option("--max-lag", o->max_lag, "Whiteness: autocorrelation lags 1..N")->check(CLI::PositiveNumber);
+  cmd->add_option("--drift-min-duration", o->drift_min_duration_s, "Shortest GNSS outage reported as drift [s]")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--ellipse-interval", o->plot.ellipse_interval_s, "Seconds between plotted ellipses")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--k-sigma", o->plot.k_sigma, "Ellipse and envelope scale k (P = k^2 S)")->check(CLI::PositiveNumber);
+  cmd->add_flag("--no-plots", o->no_plots, "Do not write or draw plots");
+  cmd->add_flag("--json", o->json, "Print the JSON summary to stdout (logs go to stderr)");
+  cmd->callback([o] {
+    try {
+      RunEvaluate(*o);
+    } catch (const std::exception& e) {
+      spdlog::error("evaluate: {}", e.what());
+      throw CLI::RuntimeError(kInputErrorExitCode);
+    }
+  });
+}
+
+}  // namespace rowloc::apps

@@ -1,0 +1,255 @@
+// Parsing, validation and the in-code shipped values of vehicle configurations (format in
+// vehicle_config.hpp; values and their sources in docs/simulation-vehicles.md).
+#include "rowloc/sim/vehicle_config.hpp"
+
+#include "json_object_reader.hpp"
+
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <set>
+#include <utility>
+
+namespace rowloc::sim {
+namespace {
+
+using Reader = detail::JsonObjectReader<VehicleConfigError>;
+using nlohmann::json;
+
+constexpr std::array<std::pair<VehicleKind, std::string_view>, 4> kKindNames = {{
+    {VehicleKind::kSwerveDrive, "swerve_drive"},
+    {VehicleKind::kFourWheelSteer, "four_wheel_steer"},
+    {VehicleKind::kDifferentialDrive, "differential_drive"},
+    {VehicleKind::kSkidSteer, "skid_steer"},
+}};
+
+/// Tolerance (metres) for "same axle" / "symmetric tracks" geometry checks.
+constexpr double kGeometryToleranceM = 1e-9;
+
+bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
+
+std::optional<std::string> MountProblem(const SensorMount& mount, const std::string& what) {
+  if (mount.name.empty()) return what + ".name must not be empty";
+  if (!mount.position_m.allFinite()) return what + ".position_m must be finite";
+  if (!std::isfinite(mount.yaw_rad)) return what + ".yaw_rad must be finite";
+  return std::nullopt;
+}
+
+std::optional<std::string> WheelListProblem(const std::vector<WheelGeometry>& wheels) {
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < wheels.size(); ++i) {
+    const WheelGeometry& wheel = wheels[i];
+    const std::string where = "wheels[" + std::to_string(i) + "]";
+    if (wheel.name.empty()) return where + ".name must not be empty";
+    if (!names.insert(wheel.name).second) return where + ".name \"" + wheel.name + "\" is used twice";
+    if (!wheel.position_m.allFinite()) return where + ".position_m must be finite";
+    if (!IsPositive(wheel.nominal_radius_m)) return where + ".nominal_radius_m must be finite and > 0";
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> SteeredKindProblem(const VehicleConfig& config) {
+  const bool swerve = config.kind == VehicleKind::kSwerveDrive;
+  if (swerve && config.wheels.size() < 3) return std::string("swerve_drive needs at least 3 wheels");
+  if (!swerve && config.wheels.size() != 4) return std::string("four_wheel_steer needs exactly 4 wheels");
+  for (std::size_t i = 0; i < config.wheels.size(); ++i) {
+    if (!config.wheels[i].steerable) {
+      return "wheels[" + std::to_string(i) + "].steerable must be true for " +
+             std::string(VehicleKindName(config.kind));
+    }
+  }
+  if (!(config.max_steering_angle_rad > 0.0 && config.max_steering_angle_rad <= std::numbers::pi)) {
+    return std::string("max_steering_angle_rad must be in (0, pi]");
+  }
+  if (config.tracks) return std::string("tracks must be null for ") + std::string(VehicleKindName(config.kind));
+  return std::nullopt;
+}
+
+std::optional<std::string> FixedPairProblem(const VehicleConfig& config) {
+  const std::string kind(VehicleKindName(config.kind));
+  if (config.wheels.size() != 2) return kind + " needs exactly 2 " + (config.tracks ? "tracks" : "wheels");
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (config.wheels[i].steerable) return "wheels[" + std::to_string(i) + "].steerable must be false for " + kind;
+  }
+  const Eigen::Vector2d& a = config.wheels[0].position_m;
+  const Eigen::Vector2d& b = config.wheels[1].position_m;
+  if (std::abs(a.x() - b.x()) > kGeometryToleranceM) return kind + ": both wheels must have the same x (one axle)";
+  if (std::abs(a.y() - b.y()) <= kGeometryToleranceM) return kind + ": the two wheels must have different y";
+  if (config.kind == VehicleKind::kDifferentialDrive) {
+    if (config.tracks) return std::string("tracks must be null for differential_drive");
+    return std::nullopt;
+  }
+  if (std::abs(a.y() + b.y()) > kGeometryToleranceM) {
+    return std::string("skid_steer: the tracks must lie at y = +B/2 and -B/2 (reference point midway)");
+  }
+  if (!config.tracks) return std::string("skid_steer needs \"tracks\"");
+  if (!IsPositive(config.tracks->contact_length_m)) {
+    return std::string("tracks.contact_length_m must be finite and > 0");
+  }
+  const double mu_t = config.tracks->turning_resistance_coefficient;
+  if (!(std::isfinite(mu_t) && mu_t >= 0.0)) {
+    return std::string("tracks.turning_resistance_coefficient must be finite and >= 0");
+  }
+  return std::nullopt;
+}
+
+Eigen::Vector2d ReadVector2(Reader& reader, const std::string& key) { return reader.Vector<2>(key); }
+
+SensorMount ReadMount(Reader reader) {
+  SensorMount mount;
+  mount.name = reader.String("name");
+  mount.position_m = reader.Vector<3>("position_m");
+  mount.yaw_rad = reader.NumberIn("yaw_rad", -std::numbers::pi, std::numbers::pi);
+  reader.RejectUnknownKeys();
+  return mount;
+}
+
+WheelGeometry ReadWheel(Reader reader) {
+  WheelGeometry wheel;
+  wheel.name = reader.String("name");
+  wheel.position_m = ReadVector2(reader, "position_m");
+  wheel.nominal_radius_m = reader.Number("nominal_radius_m");
+  if (wheel.nominal_radius_m <= 0.0) reader.Fail(reader.Key("nominal_radius_m"), "must be > 0");
+  wheel.steerable = reader.Bool("steerable");
+  reader.RejectUnknownKeys();
+  return wheel;
+}
+
+TrackParameters ReadTracks(Reader reader) {
+  TrackParameters tracks;
+  tracks.contact_length_m = reader.Number("contact_length_m");
+  tracks.turning_resistance_coefficient = reader.Number("turning_resistance_coefficient");
+  reader.RejectUnknownKeys();
+  return tracks;
+}
+
+VehicleConfig ReadConfig(Reader& root) {
+  VehicleConfig config;
+  config.name = root.String("name");
+  const std::string kind = root.String("kind");
+  const auto parsed_kind = VehicleKindFromName(kind);
+  if (!parsed_kind) {
+    root.Fail("kind", "must be one of \"swerve_drive\", \"four_wheel_steer\", \"differential_drive\", "
+                      "\"skid_steer\", got \"" + kind + "\"");
+  }
+  config.kind = *parsed_kind;
+  config.mass_kg = root.Number("mass_kg");
+  config.max_steering_angle_rad = root.Number("max_steering_angle_rad");
+  config.wheels = root.ObjectArray("wheels", ReadWheel);
+  if (!root.IsNull("tracks")) config.tracks = ReadTracks(root.Object("tracks"));
+  config.gnss_antenna = ReadMount(root.Object("gnss_antenna"));
+  config.imu = ReadMount(root.Object("imu"));
+  config.ultrasonic = root.ObjectArray("ultrasonic", ReadMount);
+  root.RejectUnknownKeys();
+  return config;
+}
+
+}  // namespace
+
+std::string_view VehicleKindName(VehicleKind kind) {
+  for (const auto& [k, name] : kKindNames) {
+    if (k == kind) return name;
+  }
+  return "unknown";
+}
+
+std::optional<VehicleKind> VehicleKindFromName(std::string_view name) {
+  for (const auto& [kind, text] : kKindNames) {
+    if (text == name) return kind;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> VehicleConfigProblem(const VehicleConfig& config) {
+  if (config.name.empty()) return std::string("name must not be empty");
+  if (!IsPositive(config.mass_kg)) return std::string("mass_kg must be finite and > 0");
+  if (!std::isfinite(config.max_steering_angle_rad)) return std::string("max_steering_angle_rad must be finite");
+  if (auto problem = WheelListProblem(config.wheels)) return problem;
+  const bool steered = config.kind == VehicleKind::kSwerveDrive || config.kind == VehicleKind::kFourWheelSteer;
+  if (auto problem = steered ? SteeredKindProblem(config) : FixedPairProblem(config)) return problem;
+  if (auto problem = MountProblem(config.gnss_antenna, "gnss_antenna")) return problem;
+  if (auto problem = MountProblem(config.imu, "imu")) return problem;
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < config.ultrasonic.size(); ++i) {
+    const std::string where = "ultrasonic[" + std::to_string(i) + "]";
+    if (auto problem = MountProblem(config.ultrasonic[i], where)) return problem;
+    if (!names.insert(config.ultrasonic[i].name).second) return where + ".name is used twice";
+  }
+  return std::nullopt;
+}
+
+VehicleConfig ParseVehicleConfig(std::string_view json_text, std::string_view source_name) {
+  const std::string source(source_name);
+  const json document = detail::ParseJsonText<VehicleConfigError>(json_text, source);
+  Reader root(document, source, "");
+  VehicleConfig config = ReadConfig(root);
+  if (const auto problem = VehicleConfigProblem(config)) throw VehicleConfigError(source + ": " + *problem);
+  return config;
+}
+
+VehicleConfig LoadVehicleConfig(const std::filesystem::path& path) {
+  return ParseVehicleConfig(detail::ReadTextFile<VehicleConfigError>(path, "vehicle file"), path.string());
+}
+
+// ---- shipped configurations (equal to config/vehicles/*.json; sources in docs/simulation-vehicles.md)
+
+VehicleConfig AgrimaroSwerveConfig() {
+  VehicleConfig c;
+  c.name = "agrimaro-swerve";
+  c.kind = VehicleKind::kSwerveDrive;
+  c.mass_kg = 80.0;
+  c.max_steering_angle_rad = std::numbers::pi;  // slip ring: unlimited steering (seed 000 §2.2.2)
+  c.wheels = {{"left_front", {0.5, 0.0}, 0.165, true},
+              {"left_rear", {-0.5, 0.0}, 0.165, true},
+              {"right", {0.0, -0.8}, 0.165, true}};
+  c.gnss_antenna = {"gnss", {0.0, -0.4, 1.2}, 0.0};
+  c.imu = {"imu", {0.0, 0.0, 0.0}, 0.0};
+  return c;
+}
+
+VehicleConfig VineyardUgv4wsConfig() {
+  constexpr double kHalfPi = std::numbers::pi / 2.0;
+  VehicleConfig c;
+  c.name = "vineyard-ugv-4ws";
+  c.kind = VehicleKind::kFourWheelSteer;
+  c.mass_kg = 120.0;
+  c.max_steering_angle_rad = 1.0;
+  c.wheels = {{"front_left", {0.5, 0.4}, 0.254, true},
+              {"front_right", {0.5, -0.4}, 0.254, true},
+              {"rear_left", {-0.5, 0.4}, 0.254, true},
+              {"rear_right", {-0.5, -0.4}, 0.254, true}};
+  c.gnss_antenna = {"gnss", {0.0, 0.0, 1.2}, 0.0};
+  c.imu = {"imu", {0.0, 0.0, 0.25}, 0.0};
+  c.ultrasonic = {{"us_front_left", {0.75, 0.5, 0.5}, kHalfPi},
+                  {"us_rear_left", {-0.75, 0.5, 0.5}, kHalfPi},
+                  {"us_front_right", {0.75, -0.5, 0.5}, -kHalfPi},
+                  {"us_rear_right", {-0.75, -0.5, 0.5}, -kHalfPi}};
+  return c;
+}
+
+VehicleConfig DifferentialDriveConfig() {
+  VehicleConfig c;
+  c.name = "differential";
+  c.kind = VehicleKind::kDifferentialDrive;
+  c.mass_kg = 50.0;
+  c.max_steering_angle_rad = 0.0;
+  c.wheels = {{"left", {0.0, 0.28}, 0.165, false}, {"right", {0.0, -0.28}, 0.165, false}};
+  c.gnss_antenna = {"gnss", {-0.1, 0.0, 0.6}, 0.0};
+  c.imu = {"imu", {0.0, 0.0, 0.2}, 0.0};
+  return c;
+}
+
+VehicleConfig TrackedVehicleConfig() {
+  VehicleConfig c;
+  c.name = "tracked";
+  c.kind = VehicleKind::kSkidSteer;
+  c.mass_kg = 600.0;
+  c.max_steering_angle_rad = 0.0;
+  c.wheels = {{"left_track", {0.0, 0.55}, 0.15, false}, {"right_track", {0.0, -0.55}, 0.15, false}};
+  c.tracks = TrackParameters{1.0, 0.3};
+  c.gnss_antenna = {"gnss", {0.0, 0.0, 1.5}, 0.0};
+  c.imu = {"imu", {0.0, 0.0, 0.4}, 0.0};
+  return c;
+}
+
+}  // namespace rowloc::sim

@@ -1,0 +1,152 @@
+#include "rowloc/sim/scenario.hpp"
+
+#include "test_support.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <numbers>
+#include <set>
+#include <string>
+
+namespace rowloc::sim {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using json = nlohmann::json;
+
+std::filesystem::path ScenarioDir() { return test::SourceDir() / "config" / "scenarios"; }
+
+json ShippedJson(const std::string& name) {
+  std::ifstream in(ScenarioDir() / (name + ".json"));
+  return json::parse(in);
+}
+
+/// Parses a shipped scenario after a change to its JSON, as if it lived in config/scenarios.
+Scenario ParseModified(const std::string& name, const std::function<void(json&)>& change) {
+  json document = ShippedJson(name);
+  change(document);
+  return ParseScenario(document.dump(), "test.json", ScenarioDir());
+}
+
+/// The message of the ScenarioError thrown by ParseModified (fails the test if none is thrown).
+std::string ErrorOf(const std::string& name, const std::function<void(json&)>& change) {
+  try {
+    ParseModified(name, change);
+  } catch (const ScenarioError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no ScenarioError";
+  return {};
+}
+
+TEST(ScenarioTest, EveryShippedScenarioLoads) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(ScenarioDir())) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    const Scenario scenario = LoadScenario(entry.path());
+    EXPECT_EQ(scenario.name, entry.path().stem().string());
+    EXPECT_FALSE(scenario.description.empty());
+    EXPECT_FALSE(RouteSpecProblem(scenario.route).has_value());
+    if (scenario.ultrasonic) {
+      ASSERT_TRUE(scenario.world.has_value());
+      for (const SensorMount& mount : scenario.ultrasonic->mounts) {
+        // Inside the canopy band of the world, so that the rangers see the rows.
+        EXPECT_GT(mount.position_m.z(), scenario.world->canopy.bottom_m + scenario.world->canopy.height_variation_m);
+        EXPECT_LT(mount.position_m.z(), scenario.world->canopy.top_m - scenario.world->canopy.height_variation_m);
+      }
+    }
+    names.insert(scenario.name);
+  }
+  for (const char* expected : {"vineyard-002-1us", "vineyard-002-2us", "vineyard-002-4us", "vineyard-002-8us",
+                               "vineyard-002-rough-4us", "agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel",
+                               "slip-odometry-loops", "slip-odometry-turns", "tracked-straight", "tracked-circle"}) {
+    EXPECT_TRUE(names.contains(expected)) << expected;
+  }
+}
+
+TEST(ScenarioTest, VineyardScenariosDifferOnlyInTheirRangers) {
+  const std::map<std::string, std::size_t> expected{
+      {"vineyard-002-1us", 1}, {"vineyard-002-2us", 2}, {"vineyard-002-4us", 4}, {"vineyard-002-8us", 8}};
+  for (const auto& [name, count] : expected) {
+    const Scenario scenario = LoadScenario(ScenarioDir() / (name + ".json"));
+    ASSERT_TRUE(scenario.ultrasonic.has_value());
+    EXPECT_EQ(scenario.ultrasonic->mounts.size(), count) << name;
+    EXPECT_DOUBLE_EQ(scenario.ultrasonic->params.range_sigma_m, 0.003);
+    EXPECT_NEAR(scenario.ultrasonic->params.half_aperture_rad, 7.5 * std::numbers::pi / 180.0, 1e-15);
+    ASSERT_TRUE(scenario.gnss.has_value());
+    EXPECT_DOUBLE_EQ(scenario.gnss->config.sigma_horizontal_m, 0.6);
+    EXPECT_DOUBLE_EQ(scenario.world->row_spacing_m, 2.5);
+  }
+}
+
+TEST(ScenarioTest, MountsReferToTheVehicleOrAreGiven) {
+  const Scenario all = ParseModified("vineyard-002-4us", [](json& s) { s["sensors"]["ultrasonic"]["mounts"] = nullptr; });
+  EXPECT_EQ(all.ultrasonic->mounts, all.vehicle.ultrasonic);
+  const Scenario named = ParseModified("vineyard-002-4us", [](json& s) {
+    s["sensors"]["ultrasonic"]["mounts"] = json::array({"us_rear_right", json::parse(
+        R"({"name": "extra", "position_m": [0.1, 0.2, 1.1], "yaw_deg": 180})")});
+  });
+  ASSERT_EQ(named.ultrasonic->mounts.size(), 2u);
+  EXPECT_EQ(named.ultrasonic->mounts[0], named.vehicle.ultrasonic[3]);
+  EXPECT_EQ(named.ultrasonic->mounts[1].name, "extra");
+  EXPECT_NEAR(named.ultrasonic->mounts[1].yaw_rad, std::numbers::pi, 1e-15);
+}
+
+TEST(ScenarioTest, OpenFieldTakesItsOrigin) {
+  const Scenario scenario = LoadScenario(ScenarioDir() / "agrimaro-tiles.json");
+  EXPECT_FALSE(scenario.world.has_value());
+  EXPECT_DOUBLE_EQ(scenario.origin.latitude_deg, 45.0628);
+  EXPECT_EQ(scenario.terrain_map.default_terrain(), TerrainClass::kTiles);
+  EXPECT_TRUE(scenario.torque.has_value());
+  EXPECT_FALSE(scenario.gnss->off_after_s.has_value());
+  const Scenario turns = LoadScenario(ScenarioDir() / "slip-odometry-turns.json");
+  ASSERT_TRUE(turns.gnss->off_after_s.has_value());
+  EXPECT_DOUBLE_EQ(*turns.gnss->off_after_s, 50.0);
+}
+
+TEST(ScenarioTest, ErrorsNameFileKeyAndReason) {
+  const std::string v = "vineyard-002-4us";
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s.erase("seed"); }), AllOf(HasSubstr("test.json: seed"), HasSubstr("missing key")));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sede"] = 1; }), AllOf(HasSubstr("test.json: sede"), HasSubstr("unknown key")));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["seed"] = -1; }), HasSubstr("seed: must be a non-negative integer"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["vehicle"] = "missing-vehicle.json"; }),
+              AllOf(HasSubstr("test.json: vehicle: "), HasSubstr("missing-vehicle.json")));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["world"] = nullptr; }), HasSubstr("origin: required for an open field"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["origin"] = json::parse(R"({"latitude_deg": 1, "longitude_deg": 2, "altitude_m": 3})"); }),
+              HasSubstr("origin: must be null with a world"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["route"]["speed_mps"] = "fast"; }), HasSubstr("test.json: route.speed_mps"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["terrain_map"]["default"] = "ice"; }), HasSubstr("test.json: terrain_map.default"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sensors"]["gnss"]["profile"] = "gnss_unknown"; }),
+              AllOf(HasSubstr("sensors.gnss.profile"), HasSubstr("gnss_rtk")));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sensors"]["ultrasonic"]["mounts"] = json::array({"us_nose"}); }),
+              HasSubstr("sensors.ultrasonic.mounts[0]: the vehicle has no ultrasonic sensor \"us_nose\""));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sensors"]["ultrasonic"]["mounts"] = json::array({"us_front_left", "us_front_left"}); }),
+              HasSubstr("mounts[1]: duplicate sensor name"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sensors"]["ultrasonic"]["range_sigma_m"] = -0.1; }),
+              HasSubstr("sensors.ultrasonic"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["sensors"]["ultrasonic"]["rate_hz"] = 0; }), HasSubstr("sensors.ultrasonic.rate_hz"));
+  EXPECT_THAT(ErrorOf(v, [](json& s) { s["truth_rate_hz"] = std::nan(""); }), HasSubstr("truth_rate_hz"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["sensors"]["ultrasonic"] = ShippedJson("vineyard-002-4us")["sensors"]["ultrasonic"]; }),
+              HasSubstr("sensors.ultrasonic: needs a world"));
+  EXPECT_THAT(ErrorOf("tracked-straight", [](json& s) { s["sensors"]["steering_encoder"] = json::parse(R"({"profile": "steering_encoder_12bit"})"); }),
+              HasSubstr("sensors.steering_encoder: the vehicle has no steerable wheel"));
+}
+
+TEST(ScenarioTest, MalformedOrMissingFileIsAnError) {
+  EXPECT_THAT([] { ParseScenario("{\"name\": ", "bad.json", ScenarioDir()); },
+              ::testing::ThrowsMessage<ScenarioError>(HasSubstr("bad.json: invalid JSON")));
+  EXPECT_THAT([] { LoadScenario(ScenarioDir() / "no-such-scenario.json"); },
+              ::testing::ThrowsMessage<ScenarioError>(HasSubstr("no-such-scenario.json: cannot open scenario file")));
+}
+
+}  // namespace
+}  // namespace rowloc::sim
