@@ -6,6 +6,7 @@
 #define BOOST_ALLOW_DEPRECATED_HEADERS
 #endif
 
+#include <boost/container/small_vector.hpp>
 #include <boost/geometry/algorithms/comparable_distance.hpp>
 #include <boost/geometry/algorithms/intersects.hpp>
 #include <boost/geometry/geometries/box.hpp>
@@ -17,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 
@@ -30,11 +32,40 @@ namespace {
 using BoostPoint = bg::model::point<double, 2, bg::cs::cartesian>;
 using BoostSegment = bg::model::segment<BoostPoint>;
 using BoostBox = bg::model::box<BoostPoint>;
-using TreeValue = std::pair<BoostSegment, std::size_t>;  // (segment, entry index)
+
+// Nearest(): values are segments, so the tree's own distances are exact point-segment distances.
+using NearestValue = std::pair<BoostSegment, std::size_t>;  // (segment, entry index)
+// The casts: values are bounding boxes, whose box-box test is much cheaper than Boost's
+// segment-box test. The segment is the box diagonal named by Diagonal (min/max copy coordinates,
+// so it is rebuilt bit for bit).
+struct Diagonal {
+  std::size_t entry = 0;
+  bool a_at_min_x = true;  // segment.a.x() == box min x (else max x); likewise for y
+  bool a_at_min_y = true;
+};
+using CastValue = std::pair<BoostBox, Diagonal>;
 // Bulk loading (packing) fixes the tree shape; 8 values per node measured fastest for these queries.
-using Tree = bgi::rtree<TreeValue, bgi::rstar<8>>;
+using NearestTree = bgi::rtree<NearestValue, bgi::rstar<8>>;
+using CastTree = bgi::rtree<CastValue, bgi::rstar<8>>;
 
 BoostPoint ToBoost(const Eigen::Vector2d& p) { return BoostPoint(p.x(), p.y()); }
+
+Segment2 ToSegment(const BoostSegment& s) {
+  return Segment2{{bg::get<0, 0>(s), bg::get<0, 1>(s)}, {bg::get<1, 0>(s), bg::get<1, 1>(s)}};
+}
+
+CastValue ToCastValue(const Segment2& s, std::size_t entry) {
+  const BoostBox box(ToBoost(s.a.cwiseMin(s.b)), ToBoost(s.a.cwiseMax(s.b)));
+  return {box, Diagonal{entry, s.a.x() <= s.b.x(), s.a.y() <= s.b.y()}};
+}
+
+Segment2 ToSegment(const CastValue& value) {
+  const BoostPoint& lo = value.first.min_corner();
+  const BoostPoint& hi = value.first.max_corner();
+  const Diagonal& d = value.second;
+  return Segment2{{(d.a_at_min_x ? lo : hi).get<0>(), (d.a_at_min_y ? lo : hi).get<1>()},
+                  {(d.a_at_min_x ? hi : lo).get<0>(), (d.a_at_min_y ? hi : lo).get<1>()}};
+}
 
 // A hit is better if nearer, or as near with a lower entry index.
 bool Better(const SegmentIndex::Hit& candidate, const std::optional<SegmentIndex::Hit>& best) {
@@ -46,25 +77,61 @@ bool HitOrder(const SegmentIndex::Hit& l, const SegmentIndex::Hit& r) {
   return l.hit.range_m < r.hit.range_m || (l.hit.range_m == r.hit.range_m && l.entry < r.entry);
 }
 
-// Bounding box of the sector clipped at radius reach_m, inflated so that rounding and the
-// contact tolerance of the casts never drop a touching segment.
-BoostBox SectorBox(const PreparedCone& sector, double reach_m) {
+// Bounding box of the part of the sector with range in [inner_m, outer_m] (its corners and the arc
+// extremes), inflated so that rounding and the contact tolerance of the casts never drop a
+// touching segment.
+BoostBox PieceBox(const PreparedCone& sector, double inner_m, double outer_m) {
   const Eigen::Vector2d& apex = sector.cone().apex;
-  Eigen::Vector2d lo = apex;
-  Eigen::Vector2d hi = apex;
+  Eigen::Vector2d lo = apex + inner_m * sector.edge_cw();
+  Eigen::Vector2d hi = lo;
   const auto add = [&](const Eigen::Vector2d& x) {
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
   };
-  add(apex + reach_m * sector.edge_cw());
-  add(apex + reach_m * sector.edge_ccw());
+  add(apex + inner_m * sector.edge_ccw());
+  add(apex + outer_m * sector.edge_cw());
+  add(apex + outer_m * sector.edge_ccw());
   const Eigen::Vector2d cardinal[] = {Eigen::Vector2d::UnitX(), -Eigen::Vector2d::UnitX(),
                                       Eigen::Vector2d::UnitY(), -Eigen::Vector2d::UnitY()};
   for (const Eigen::Vector2d& u : cardinal) {
-    if (sector.SectorContains(apex + u)) add(apex + reach_m * u);  // arc extremes
+    if (sector.SectorContains(apex + u)) add(apex + outer_m * u);  // outer arc extremes
   }
-  const double margin = 2.0 * kContactTolerance_m + 1e-12 * (apex.cwiseAbs().maxCoeff() + reach_m);
+  const double margin = 2.0 * kContactTolerance_m + 1e-12 * (apex.cwiseAbs().maxCoeff() + outer_m);
   return BoostBox(ToBoost(lo.array() - margin), ToBoost(hi.array() + margin));
+}
+
+// The three half-planes that contain the sector (inside of each edge, ahead of the apex). A
+// segment with both ends clearly outside one of them cannot be hit: every candidate point of a
+// cast lies in the sector or within kContactTolerance_m of an edge ray, and the margin covers that
+// plus rounding (relative to the coordinates and to the segment's distance).
+class SectorHalfPlanes {
+ public:
+  explicit SectorHalfPlanes(const PreparedCone& sector)
+      : apex_(sector.cone().apex),
+        normals_{Eigen::Vector2d(-sector.edge_cw().y(), sector.edge_cw().x()),
+                 Eigen::Vector2d(sector.edge_ccw().y(), -sector.edge_ccw().x()),
+                 sector.cone().axis},
+        margin_m_(4.0 * kContactTolerance_m + 1e-12 * apex_.cwiseAbs().maxCoeff()) {}
+
+  bool MayMeet(const Segment2& s) const {
+    const Eigen::Vector2d va = s.a - apex_;
+    const Eigen::Vector2d vb = s.b - apex_;
+    const double margin_m = margin_m_ + 1e-10 * (va.cwiseAbs().sum() + vb.cwiseAbs().sum());
+    return std::none_of(std::begin(normals_), std::end(normals_), [&](const Eigen::Vector2d& n) {
+      return n.dot(va) < -margin_m && n.dot(vb) < -margin_m;
+    });
+  }
+
+ private:
+  Eigen::Vector2d apex_;
+  Eigen::Vector2d normals_[3];
+  double margin_m_;
+};
+
+// A cast's range is at least the segment's distance from the apex minus the contact tolerance and
+// rounding: a segment farther from the apex than this cannot give a hit at range <= range_m.
+double FarthestUsefulDistance(double range_m, const Eigen::Vector2d& apex) {
+  return range_m + 4.0 * kContactTolerance_m + 1e-9 * range_m + 1e-12 * apex.cwiseAbs().maxCoeff();
 }
 
 void CheckEntries(const std::vector<SegmentIndex::Entry>& entries) {
@@ -78,30 +145,40 @@ void CheckEntries(const std::vector<SegmentIndex::Entry>& entries) {
   }
 }
 
+template <class Value, class Make>
+std::vector<Value> TreeValues(const std::vector<SegmentIndex::Entry>& entries, Make&& make) {
+  std::vector<Value> values;
+  values.reserve(entries.size());
+  for (std::size_t i = 0; i < entries.size(); ++i) values.push_back(make(entries[i].segment, i));
+  return values;
+}
+
 }  // namespace
 
 struct SegmentIndex::Impl {
   std::vector<Entry> entries;
-  Tree tree;
+  NearestTree nearest_tree;
+  CastTree cast_tree;
   Eigen::Vector2d bounds_lo = Eigen::Vector2d::Zero();  // bounding box of all segments
   Eigen::Vector2d bounds_hi = Eigen::Vector2d::Zero();
-  double initial_radius_m = 1.0;  // first search radius of the growing sector search
+  double initial_radius_m = 1.0;  // outer radius of the first piece of the growing sector search
 
   explicit Impl(std::vector<Entry> e) : entries(std::move(e)) {
     CheckEntries(entries);
-    std::vector<TreeValue> values;
-    values.reserve(entries.size());
-    double total_length_m = 0.0;
-    for (std::size_t i = 0; i < entries.size(); ++i) {
-      const Segment2& s = entries[i].segment;
-      values.emplace_back(BoostSegment(ToBoost(s.a), ToBoost(s.b)), i);
-      total_length_m += s.Length();
-    }
-    tree = Tree(values.begin(), values.end());  // packing (bulk-loading) constructor
+    // Packing (bulk-loading) constructors.
+    const auto to_nearest_value = [](const Segment2& s, std::size_t i) {
+      return NearestValue(BoostSegment(ToBoost(s.a), ToBoost(s.b)), i);
+    };
+    const auto nearest_values = TreeValues<NearestValue>(entries, to_nearest_value);
+    nearest_tree = NearestTree(nearest_values.begin(), nearest_values.end());
+    const auto cast_values = TreeValues<CastValue>(entries, ToCastValue);
+    cast_tree = CastTree(cast_values.begin(), cast_values.end());
     if (!entries.empty()) {
-      const BoostBox box = tree.bounds();
+      const BoostBox box = cast_tree.bounds();
       bounds_lo = {box.min_corner().get<0>(), box.min_corner().get<1>()};
       bounds_hi = {box.max_corner().get<0>(), box.max_corner().get<1>()};
+      double total_length_m = 0.0;
+      for (const Entry& entry : entries) total_length_m += entry.segment.Length();
       initial_radius_m = 2.0 * total_length_m / static_cast<double>(entries.size());
     }
   }
@@ -112,12 +189,37 @@ struct SegmentIndex::Impl {
     return far.stableNorm();
   }
 
-  // Calls visit(entry index) for every segment meeting the sector's box clipped at reach_m.
+  // Calls visit(segment, entry index) for every segment whose bounding box meets box.
   template <class Visit>
-  void VisitCandidates(const PreparedCone& sector, double reach_m, Visit&& visit) const {
-    tree.query(bgi::intersects(SectorBox(sector, reach_m)),
-               boost::make_function_output_iterator(
-                   [&](const TreeValue& value) { visit(value.second); }));
+  void VisitCandidates(const BoostBox& box, Visit&& visit) const {
+    const auto each = [&](const CastValue& v) { visit(ToSegment(v), v.second.entry); };
+    cast_tree.query(bgi::intersects(box), boost::make_function_output_iterator(each));
+  }
+
+  // One step of the growing search: the segments near the piece of the sector with range in
+  // [inner_m, outer_m], cast nearest first while they can still beat best (or reach limit_m).
+  template <class Cast>
+  void CastPiece(const PreparedCone& sector, const SectorHalfPlanes& half_planes, double inner_m,
+                 double outer_m, double limit_m, Cast& cast, std::optional<Hit>& best) const {
+    struct Candidate {
+      double distance_m;  // from the apex
+      Segment2 segment;
+      std::size_t entry;
+    };
+    const Eigen::Vector2d& apex = sector.cone().apex;
+    boost::container::small_vector<Candidate, 16> candidates;
+    VisitCandidates(PieceBox(sector, inner_m, outer_m), [&](const Segment2& s, std::size_t entry) {
+      if (half_planes.MayMeet(s)) candidates.push_back(Candidate{s.Distance(apex), s, entry});
+    });
+    std::sort(candidates.begin(), candidates.end(),
+              [](const Candidate& l, const Candidate& r) { return l.distance_m < r.distance_m; });
+    for (const Candidate& c : candidates) {
+      if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m : limit_m, apex)) return;
+      if (const std::optional<RayHit> hit = cast(c.segment)) {
+        const Hit candidate{*hit, c.entry};
+        if (Better(candidate, best)) best = candidate;
+      }
+    }
   }
 
   // Nearest hit of cast(segment) over all entries, by the growing-radius search.
@@ -125,16 +227,14 @@ struct SegmentIndex::Impl {
   std::optional<Hit> NearestHit(const PreparedCone& sector, Cast&& cast) const {
     if (entries.empty()) return std::nullopt;
     const double limit_m = std::min(sector.cone().max_range_m, CoverRadius(sector.cone().apex));
+    const SectorHalfPlanes half_planes(sector);
     std::optional<Hit> best;
+    double inner_m = 0.0;
     for (double radius_m = initial_radius_m;; radius_m *= 2.0) {
-      const double reach_m = std::min(radius_m, limit_m);
-      VisitCandidates(sector, reach_m, [&](std::size_t entry) {
-        if (const std::optional<RayHit> hit = cast(entries[entry].segment)) {
-          const Hit candidate{*hit, entry};
-          if (Better(candidate, best)) best = candidate;
-        }
-      });
-      if ((best && best->hit.range_m <= reach_m) || reach_m >= limit_m) return best;
+      const double outer_m = std::min(radius_m, limit_m);
+      CastPiece(sector, half_planes, inner_m, outer_m, limit_m, cast, best);
+      if ((best && best->hit.range_m <= outer_m) || outer_m >= limit_m) return best;
+      inner_m = outer_m;
     }
   }
 };
@@ -165,11 +265,11 @@ std::vector<std::pair<double, std::size_t>> SegmentIndex::Nearest(const Eigen::V
   std::vector<std::pair<double, std::size_t>> result;
   if (k == 0 || impl_->entries.empty()) return result;
   result.reserve(std::min(k, impl_->entries.size()));
-  impl_->tree.query(bgi::nearest(ToBoost(p), static_cast<unsigned>(std::min(k, size()))),
-                    boost::make_function_output_iterator([&](const TreeValue& value) {
-                      result.emplace_back(impl_->entries[value.second].segment.Distance(p),
-                                          value.second);
-                    }));
+  // The distance is computed from the tree's copy of the segment: entries[] is not in the cache.
+  impl_->nearest_tree.query(bgi::nearest(ToBoost(p), static_cast<unsigned>(std::min(k, size()))),
+                            boost::make_function_output_iterator([&](const NearestValue& value) {
+                              result.emplace_back(ToSegment(value.first).Distance(p), value.second);
+                            }));
   std::sort(result.begin(), result.end());
   return result;
 }
@@ -197,10 +297,10 @@ std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone) cons
   std::vector<Hit> hits;
   if (impl_->entries.empty()) return hits;
   const double reach_m = std::min(sector.cone().max_range_m, impl_->CoverRadius(sector.cone().apex));
-  impl_->VisitCandidates(sector, reach_m, [&](std::size_t entry) {
-    if (const std::optional<RayHit> hit = sector.Cast(impl_->entries[entry].segment)) {
-      hits.push_back(Hit{*hit, entry});
-    }
+  const SectorHalfPlanes half_planes(sector);
+  impl_->VisitCandidates(PieceBox(sector, 0.0, reach_m), [&](const Segment2& s, std::size_t entry) {
+    if (!half_planes.MayMeet(s)) return;
+    if (const std::optional<RayHit> hit = sector.Cast(s)) hits.push_back(Hit{*hit, entry});
   });
   std::sort(hits.begin(), hits.end(), HitOrder);
   return hits;

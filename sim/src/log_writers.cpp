@@ -102,9 +102,13 @@ SensorLogWriter::SensorLogWriter(std::ostream& out, LogHeader header) : out_(out
 void SensorLogWriter::CheckTime(const char* type, double time_s) { CheckTimeOrder(type, time_s, last_time_s_); }
 
 void SensorLogWriter::CheckWheels(const char* type, const NamedValues& values, bool all_required) const {
-  for (const auto& [name, value] : values) {
+  for (auto it = values.begin(); it != values.end(); ++it) {
+    const std::string& name = it->first;
     if (std::find(header_.wheels.begin(), header_.wheels.end(), name) == header_.wheels.end()) {
       Refuse(type, "wheel \"" + name + "\" is not in the log header");
+    }
+    if (std::any_of(values.begin(), it, [&](const auto& earlier) { return earlier.first == name; })) {
+      Refuse(type, "wheel \"" + name + "\" appears twice");
     }
   }
   if (all_required && values.size() != header_.wheels.size()) {
@@ -151,7 +155,7 @@ void SensorLogWriter::Write(const ImuMessage& m) {
 void SensorLogWriter::Write(const WheelsMessage& m) {
   CheckTime("wheels", m.time_s);
   CheckWheels("wheels", m.speed_radps, true);
-  CheckWheels("wheels", m.torque_nm, false);
+  if (!m.torque_nm.empty()) CheckWheels("wheels", m.torque_nm, true);  // all wheels or none
   ordered_json j = MessageStart("wheels", m.time_s);
   j["speed_radps"] = NamedJson("wheels", m.speed_radps);
   if (!m.torque_nm.empty()) j["torque_nm"] = NamedJson("wheels", m.torque_nm);

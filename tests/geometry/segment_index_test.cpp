@@ -222,6 +222,129 @@ TEST_P(VineyardHeading, QueriesMatchBruteForce) {
 INSTANTIATE_TEST_SUITE_P(Headings, VineyardHeading,
                          ::testing::Values(0.0, 45.0, 90.0, 135.0, 180.0, 270.0));
 
+// Segments that graze the edge rays of the cones (perpendicular offsets around the contact
+// tolerance, collinear with an edge, through the apex, just behind it): the pruning of the index
+// (piece boxes, half-planes, distance cut-off) must keep exactly what the brute force keeps.
+TEST(SegmentIndex, GrazingSegmentsMatchBruteForce) {
+  const double offsets[] = {-3e-9, -1.5e-9, -1e-9, -5e-10, 0.0, 5e-10, 1e-9, 2e-9};
+  const double ranges[] = {0.7, 1.9, 3.999999999, 4.0, 4.000000001, 6.5};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> coord(0.0, 40.0), angle(-kPi, kPi), half(0.0, Deg(45.0));
+  std::vector<Cone2> cones;
+  std::vector<Entry> entries = RandomSegments(400, 40.0, 6);
+  for (int c = 0; c < 6; ++c) {
+    const Cone2 cone{{coord(rng), coord(rng)}, Heading(angle(rng)), c == 0 ? 0.0 : half(rng), 4.0};
+    cones.push_back(cone);
+    const PreparedCone prepared(cone);
+    for (const Eigen::Vector2d& edge : {prepared.edge_cw(), prepared.edge_ccw()}) {
+      const Eigen::Vector2d out = edge == prepared.edge_cw() ? Eigen::Vector2d(edge.y(), -edge.x())
+                                                            : Eigen::Vector2d(-edge.y(), edge.x());
+      for (double r : ranges) {
+        for (double offset : offsets) {
+          const Eigen::Vector2d foot = cone.apex + r * edge + offset * out;
+          entries.push_back(Entry{Segment2{foot, foot + 0.3 * out}, 0, entries.size()});  // across
+          entries.push_back(Entry{Segment2{foot, foot + 0.4 * edge}, 0, entries.size()});  // along
+        }
+      }
+    }
+    entries.push_back(Entry{Segment2{cone.apex, cone.apex - 0.5 * cone.axis}, 0, entries.size()});
+    const Eigen::Vector2d behind = cone.apex - 1e-9 * cone.axis;
+    const Eigen::Vector2d side(-cone.axis.y(), cone.axis.x());
+    entries.push_back(Entry{Segment2{behind - side, behind + side}, 0, entries.size()});
+  }
+  const SegmentIndex index(entries);
+  for (std::size_t c = 0; c < cones.size(); ++c) {
+    const Cone2& cone = cones[c];
+    const std::string what = "cone " + std::to_string(c);
+    ExpectSameHit(index.ConeCast(cone), BruteCone(entries, cone), what);
+    const PreparedCone prepared(cone);
+    for (const Eigen::Vector2d& d : {prepared.edge_cw(), prepared.edge_ccw(), cone.axis}) {
+      ExpectSameHit(index.RayCast(cone.apex, d, cone.max_range_m),
+                    BruteRay(entries, cone.apex, d, cone.max_range_m), what + " ray");
+    }
+    std::vector<std::size_t> got;
+    for (const Hit& hit : index.ConeCastAll(cone)) got.push_back(hit.entry);
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, BruteConeAll(entries, cone)) << what;
+    EXPECT_GT(got.size(), 20u) << what;  // the grazing segments are really touched
+  }
+}
+
+// A hit inside the contact tolerance can be nearer than its segment is: the ray meets the line of
+// `grazing` 0.3 nm before the wall, 0.5 nm before the segment starts; the cast reports that nearer
+// range and it wins over the wall although the wall segment is nearer to the origin.
+TEST(SegmentIndex, HitWithinTheContactToleranceBeatsANearerSegment) {
+  const Eigen::Vector2d u = Heading(Deg(30.0));
+  const Eigen::Vector2d crossing(2.0 - 0.3e-9, 0.0);
+  std::vector<Entry> entries = RandomSegments(500, 20.0, 15);
+  for (Entry& e : entries) {  // keep the background away from the ray
+    e.segment.a.y() += 30.0;
+    e.segment.b.y() += 30.0;
+  }
+  entries.push_back(Entry{Segment2{{2.0, -0.5}, {2.0, 0.5}}, 0, 0});                    // the wall
+  entries.push_back(Entry{Segment2{crossing + 0.5e-9 * u, crossing + 1.0 * u}, 0, 0});  // grazing
+  const SegmentIndex index(entries);
+  const auto ray = index.RayCast({0.0, 0.0}, {1.0, 0.0}, 4.0);
+  ExpectSameHit(ray, BruteRay(entries, {0.0, 0.0}, {1.0, 0.0}, 4.0), "ray");
+  ASSERT_TRUE(ray.has_value());
+  EXPECT_EQ(ray->entry, entries.size() - 1);
+  EXPECT_LT(ray->hit.range_m, 2.0);
+  const Cone2 cone{{0.0, 0.0}, {1.0, 0.0}, 0.0, 4.0};
+  ExpectSameHit(index.ConeCast(cone), BruteCone(entries, cone), "cone");
+}
+
+// Map coordinates of a projected frame (UTM: 10^5-10^6 m): the rounding margins scale with them.
+TEST(SegmentIndex, LargeCoordinatesMatchBruteForce) {
+  const Eigen::Vector2d utm(452317.25, 5412873.5);
+  std::vector<Entry> entries = RandomSegments(20000, 150.0, 11);
+  for (Entry& e : entries) {
+    e.segment.a += utm;
+    e.segment.b += utm;
+  }
+  const SegmentIndex index(entries);
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> coord(0.0, 150.0), angle(-kPi, kPi), half(0.0, Deg(60.0));
+  const double ranges[] = {4.0, 20.0, kInf};
+  int hits = 0;
+  for (int q = 0; q < 6 * kQueryScale; ++q) {
+    const Cone2 cone{utm + Eigen::Vector2d(coord(rng), coord(rng)), Heading(angle(rng)),
+                     q % 3 == 0 ? Deg(7.5) : half(rng), ranges[q % 3]};
+    const std::string what = "query " + std::to_string(q);
+    const auto hit = index.ConeCast(cone);
+    ExpectSameHit(hit, BruteCone(entries, cone), what);
+    ExpectSameHit(index.RayCast(cone.apex, cone.axis, cone.max_range_m),
+                  BruteRay(entries, cone.apex, cone.axis, cone.max_range_m), what);
+    hits += hit.has_value();
+  }
+  EXPECT_GT(hits, 3 * kQueryScale);
+}
+
+// Identical segments under different entries: every query reports the lower entry.
+TEST(SegmentIndex, DuplicateSegmentsReportTheLowerEntry) {
+  std::vector<Entry> entries = RandomSegments(3000, 30.0, 13);
+  const std::size_t n = entries.size();
+  for (std::size_t i = 0; i < n; ++i) entries.push_back(entries[i]);  // entry i + n copies entry i
+  const SegmentIndex index(entries);
+  std::mt19937_64 rng(14);
+  std::uniform_real_distribution<double> coord(0.0, 30.0), angle(-kPi, kPi);
+  int hits = 0;
+  for (int q = 0; q < 200; ++q) {
+    const Cone2 cone{{coord(rng), coord(rng)}, Heading(angle(rng)), Deg(7.5), 4.0};
+    const auto hit = index.ConeCast(cone);
+    ExpectSameHit(hit, BruteCone(entries, cone), "cone " + std::to_string(q));
+    const auto ray = index.RayCast(cone.apex, cone.axis, 4.0);
+    ExpectSameHit(ray, BruteRay(entries, cone.apex, cone.axis, 4.0), "ray " + std::to_string(q));
+    if (hit) {
+      EXPECT_LT(hit->entry, n);
+    }
+    if (ray) {
+      EXPECT_LT(ray->entry, n);
+    }
+    hits += hit.has_value();
+  }
+  EXPECT_GT(hits, 50);
+}
+
 TEST(SegmentIndex, FromRowMapNumbersRowsAndSegments) {
   RowMap map;
   map.rows.push_back(Row{"a", {{0.0, 0.0}, {1.0, 0.0}, {2.0, 0.0}}, false});

@@ -100,7 +100,11 @@ TEST(SensorLogWriter, RefusesWhatTheProtocolForbidsAndWritesNothingForIt) {
                std::invalid_argument);
   EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}}, {}}), std::invalid_argument);  // missing wheel
   EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"middle", 1.0}}, {}}), std::invalid_argument);
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"left", 1.0}}, {}}), std::invalid_argument);  // twice
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"right", 1.0}}, {{"left", 2.0}}}),
+               std::invalid_argument);  // torque for only some wheels
   EXPECT_THROW(writer.Write(SteeringMessage{3.0, {{"nose", 0.1}}}), std::invalid_argument);
+  EXPECT_THROW(writer.Write(SteeringMessage{3.0, {{"left", 0.1}, {"left", 0.2}}}), std::invalid_argument);
   EXPECT_THROW(writer.Write(UltrasonicMessage{3.0, "us_right", 1.0}), std::invalid_argument);
   EXPECT_THROW(writer.Write(UltrasonicMessage{3.0, "us_left", std::nan("")}), std::invalid_argument);
   EXPECT_EQ(out.str(), before);

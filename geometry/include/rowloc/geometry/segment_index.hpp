@@ -1,19 +1,28 @@
-// SegmentIndex: a Boost.Geometry R-tree (R*, bulk-loaded) over the segments of a row map, so that
+// SegmentIndex: Boost.Geometry R-trees (R*, bulk-loaded) over the segments of a row map, so that
 // the segments near a point or a sensor beam are found in O(log N + k), not by a scan of N
 // segments (SPEC §4, "Planar geometry"; docs/planar-geometry.md).
 //
 // Queries and their exact semantics (the per-segment semantics are those of ray_cast.hpp and
 // cone_cast.hpp; ties in range or distance are broken by the lower entry index):
 // - Nearest(p, k): the k segments nearest to p (exact point-segment distance), ascending.
-// - RayCast / ConeCast: the nearest hit over all segments. The search grows the sector radius
-//   r = r0, 2 r0, 4 r0, ... up to max_range: each step queries the R-tree with the bounding box
-//   of the sector clipped at r (inflated by 2 kContactTolerance_m) and refines every candidate
-//   exactly; it stops as soon as the best hit has range <= r (no nearer hit can exist outside the
-//   box), so the work depends on the distance of the hit, not on max_range (which may be +inf).
-//   r0 is twice the mean segment length.
+// - RayCast / ConeCast: the nearest hit over all segments, by a growing search over pieces of the
+//   sector: piece k holds the ranges [r_(k-1), r_k], r_k = 2^k r0 (r_(-1) = 0), clipped at
+//   max_range. For each piece it queries an R-tree of segment bounding boxes with the piece's
+//   bounding box (inflated by 2 kContactTolerance), drops segments with both ends outside one of
+//   the sector's three half-planes (the two edges and ahead of the apex), sorts the rest by
+//   distance from the apex and casts them exactly in that order until a segment is too far to beat
+//   the best hit (a hit's range is never below its segment's distance minus the contact tolerance).
+//   It stops as soon as the best hit has range <= r_k (no nearer hit can exist in later pieces),
+//   so the work depends on the distance of the hit, not on max_range (which may be +inf); no
+//   segment is fetched twice unless it straddles two pieces. r0 is twice the mean segment length.
+//   A best-first traversal (Boost's incremental nearest query) measured 1.3-2x slower: its
+//   type-erased iterator allocates and sorts at every node.
 // - ConeCastAll: every segment meeting the sector, with its nearest point, by range (at a polygon
 //   corner both segments are returned). No occlusion: segments behind others are returned too.
-// The index is immutable; copies share the tree and concurrent const queries are safe.
+//   One query with the bounding box of the whole sector, the same half-plane filter, exact casts.
+// Nearest uses a second R-tree over the segments themselves (exact point-segment distances); the
+// casts use the bounding-box tree because Boost's segment-box test costs more than the box-box one.
+// The index is immutable; copies share the trees and concurrent const queries are safe.
 #pragma once
 
 #include "rowloc/geometry/cone_cast.hpp"

@@ -1,11 +1,11 @@
 // Writers of the three NDJSON streams of docs/protocol.md: the sensor log (§1), the ground-truth
 // stream (§2) and the estimate stream (§3, written here for the simulator's baseline estimators).
 //
-// One JSON object per line, keys in the documented order (nlohmann::ordered_json), numbers in the
-// shortest form that reads back to the same double, so the same inputs give the same bytes on every
-// platform. The writers refuse what the protocol forbids instead of writing it: a non-finite number,
+// One JSON object per line, keys in the documented order (nlohmann::ordered_json), numbers as
+// nlohmann-json prints them (at most 17 significant digits, reading back to the same double), so
+// the same inputs give the same bytes. The writers refuse what the protocol forbids instead of writing it: a non-finite number,
 // a time stamp before the previous one of the same stream, a message before the header, a wheel or
-// sensor name the header does not list. Each refusal is a std::invalid_argument naming the message
+// sensor name the header does not list, a wheel listed twice, torques for only some wheels. Each refusal is a std::invalid_argument naming the message
 // type and the reason; nothing is written for a refused message.
 #pragma once
 
