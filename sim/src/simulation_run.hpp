@@ -39,6 +39,8 @@ class SimulationRun {
   SimulationSummary Run(const std::function<void(double, double)>& progress);
 
  private:
+  /// The truth at time_s, evaluated once per distinct time (a reference valid until the next call).
+  const VehicleTruth& TruthAt(double time_s);
   void Tick(const Clock& clock, double time_s);
   void SampleGnss(double time_s);
   void SampleImu(double time_s);
@@ -74,6 +76,8 @@ class SimulationRun {
   std::optional<DeadReckoning> dead_reckoning_;
 
   // Latest states shared between streams.
+  std::optional<VehicleTruth> cached_truth_;  ///< TruthAt's last result, at cached_truth_time_s_
+  double cached_truth_time_s_ = 0.0;
   std::optional<double> previous_wheel_time_s_;
   std::vector<double> previous_wheel_rate_radps_;
   std::vector<double> steering_readings_rad_;

@@ -8,13 +8,22 @@
 
 namespace rowloc::sim::detail {
 
+const VehicleTruth& SimulationRun::TruthAt(double time_s) {
+  // Several clocks tick at the same instants (e.g. every 20 ms: imu, steering, wheels, truth).
+  if (!cached_truth_ || cached_truth_time_s_ != time_s) {
+    cached_truth_ = truth_.At(time_s);
+    cached_truth_time_s_ = time_s;
+  }
+  return *cached_truth_;
+}
+
 void SimulationRun::SampleGnss(double time_s) {
   const auto& off_after = scenario_.gnss->off_after_s;
   if (off_after && time_s > *off_after) {  // the receiver is gone: no message at all
     gnss_fix_ = false;
     return;
   }
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   const SensorMount& antenna = scenario_.vehicle.gnss_antenna;
   const Eigen::Vector3d position = truth_.WorldPoint(truth, antenna.position_m);
   const double cover = cover_ ? cover_->At(position.head<2>(), antenna.position_m.z(), truth.route.heading_rad) : 0.0;
@@ -50,7 +59,7 @@ void SimulationRun::SampleGnss(double time_s) {
 }
 
 void SimulationRun::SampleImu(double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   const Eigen::Vector2d force = truth_.SpecificForce(truth, scenario_.vehicle.imu.position_m.head<2>());
   const ImuSample sample = imu_->Measure(time_s, ImuTruth{force.x(), force.y(), truth.motion.yaw_rate_radps});
   imu_bias_ = sample.bias;
@@ -61,7 +70,7 @@ void SimulationRun::SampleImu(double time_s) {
 }
 
 void SimulationRun::SampleSteering(double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   SteeringMessage message{time_s, {}};
   for (std::size_t i = 0; i < steering_encoders_.size(); ++i) {
     if (!steering_encoders_[i]) continue;
@@ -75,15 +84,17 @@ void SimulationRun::SampleSteering(double time_s) {
 }
 
 void SimulationRun::SampleWheels(double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
-  const std::size_t n = truth.wheels.size();
+  const std::size_t n = scenario_.vehicle.wheels.size();
   std::vector<double> mean_rate(n);
   if (previous_wheel_time_s_) {  // Simpson's rule on the exact rate over (t_prev, t]
-    const VehicleTruth middle = truth_.At(0.5 * (*previous_wheel_time_s_ + time_s));
+    const VehicleTruth& middle = TruthAt(0.5 * (*previous_wheel_time_s_ + time_s));
     for (std::size_t i = 0; i < n; ++i) {
-      mean_rate[i] = (previous_wheel_rate_radps_[i] + 4.0 * middle.wheels[i].wheel_angular_speed_radps +
-                      truth.wheels[i].wheel_angular_speed_radps) / 6.0;
+      mean_rate[i] = previous_wheel_rate_radps_[i] + 4.0 * middle.wheels[i].wheel_angular_speed_radps;
     }
+  }
+  const VehicleTruth& truth = TruthAt(time_s);  // after the middle: TruthAt keeps one time
+  if (previous_wheel_time_s_) {
+    for (std::size_t i = 0; i < n; ++i) mean_rate[i] = (mean_rate[i] + truth.wheels[i].wheel_angular_speed_radps) / 6.0;
   }
   WheelsMessage message{time_s, {}, {}};
   std::vector<double> readings(n);
@@ -108,7 +119,7 @@ void SimulationRun::SampleWheels(double time_s) {
 }
 
 void SimulationRun::SampleVio(double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   const Eigen::Vector2d velocity = PointVelocity(truth.motion, scenario_.vio->position_m.head<2>());
   std::normal_distribution<double> unit_normal;
   const double vx = velocity.x() + scenario_.vio->sigma_mps * unit_normal(vio_rng_);
@@ -118,7 +129,7 @@ void SimulationRun::SampleVio(double time_s) {
 }
 
 void SimulationRun::SampleUltrasonic(std::size_t sensor, double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   const SensorMount& mount = scenario_.ultrasonic->mounts[sensor];
   const Eigen::Vector3d apex = truth_.WorldPoint(truth, mount.position_m);
   const auto reading = ultrasonic_[sensor].Measure(*caster_, apex.head<2>(),
@@ -135,7 +146,7 @@ void SimulationRun::SampleUltrasonic(std::size_t sensor, double time_s) {
 }
 
 void SimulationRun::WriteTruth(double time_s) {
-  const VehicleTruth truth = truth_.At(time_s);
+  const VehicleTruth& truth = TruthAt(time_s);
   TruthRecord record;
   record.time_s = time_s;
   record.position_m = truth.position_m;
