@@ -1,6 +1,6 @@
 #include "rowloc/sim/route_builders.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -191,7 +191,7 @@ RouteSpec RowsRoute(const RowWorld& world, int first_lane, int lane_count, doubl
 
 namespace {
 
-using Reader = detail::JsonObjectReader<RouteConfigError>;
+using Reader = mapio::detail::JsonObjectReader<RouteConfigError>;
 
 struct Motion {
   double speed_mps, accel_mps2, lateral_mps2, start_dwell_s, end_dwell_s;
@@ -265,7 +265,7 @@ RouteSpec ParseRouteSpec(std::string_view json_object_text, std::string_view sou
 RouteSpec ParseRouteSpec(std::string_view json_object_text, std::string_view source_name, const RowWorld* world,
                          std::string_view key_path_prefix) {
   const std::string source(source_name);
-  const nlohmann::json json = detail::ParseJsonText<RouteConfigError>(json_object_text, source);
+  const nlohmann::json json = mapio::detail::ParseJsonText<RouteConfigError>(json_object_text, source);
   Reader reader(json, source, std::string(key_path_prefix));
   const std::string type = reader.String("type");
   const Motion motion = ReadMotion(reader);

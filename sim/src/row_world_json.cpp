@@ -1,7 +1,7 @@
 // World files (docs/simulation-world.md, "World files"): strict JSON -> RowWorldParams.
 #include "rowloc/sim/row_world.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <cstdint>
 #include <limits>
@@ -11,7 +11,7 @@
 namespace rowloc::sim {
 namespace {
 
-using Reader = detail::JsonObjectReader<std::runtime_error>;
+using Reader = mapio::detail::JsonObjectReader<std::runtime_error>;
 /// The keys an object must have (sorted: missing keys are reported in alphabetical order).
 using KeySet = std::set<std::string>;
 
@@ -93,14 +93,14 @@ RowWorldParams ParseTop(const nlohmann::json& document, const std::string& sourc
 
 RowWorldParams ParseRowWorldParams(std::string_view json_text, std::string_view source_name) {
   const std::string source(source_name);
-  const nlohmann::json document = detail::ParseJsonText<std::runtime_error>(json_text, source, "JSON syntax error");
+  const nlohmann::json document = mapio::detail::ParseJsonText<std::runtime_error>(json_text, source, "JSON syntax error");
   RowWorldParams p = ParseTop(document, source);
   if (auto problem = RowWorldParamsProblem(p)) throw std::runtime_error(source + ": " + *problem);
   return p;
 }
 
 RowWorldParams LoadRowWorldParams(const std::filesystem::path& path) {
-  return ParseRowWorldParams(detail::ReadTextFile<std::runtime_error>(path, "the world file"), path.string());
+  return ParseRowWorldParams(mapio::detail::ReadTextFile<std::runtime_error>(path, "the world file"), path.string());
 }
 
 }  // namespace rowloc::sim

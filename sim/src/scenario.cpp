@@ -1,6 +1,6 @@
 #include "rowloc/sim/scenario.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 #include "rowloc/sim/route_builders.hpp"
 #include "rowloc/sim/sensor_config.hpp"
 
@@ -12,7 +12,7 @@
 namespace rowloc::sim {
 namespace {
 
-using Reader = detail::JsonObjectReader<ScenarioError>;
+using Reader = mapio::detail::JsonObjectReader<ScenarioError>;
 using json = nlohmann::json;
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
@@ -221,12 +221,12 @@ Scenario ParseScenarioObject(Reader reader, const std::filesystem::path& base) {
 Scenario ParseScenario(std::string_view json_text, std::string_view source_name,
                        const std::filesystem::path& base_directory) {
   const std::string source(source_name);
-  const json document = detail::ParseJsonText<ScenarioError>(json_text, source);
+  const json document = mapio::detail::ParseJsonText<ScenarioError>(json_text, source);
   return ParseScenarioObject(Reader(document, source, ""), base_directory);
 }
 
 Scenario LoadScenario(const std::filesystem::path& path) {
-  const std::string text = detail::ReadTextFile<ScenarioError>(path, "scenario file");
+  const std::string text = mapio::detail::ReadTextFile<ScenarioError>(path, "scenario file");
   return ParseScenario(text, path.string(), path.parent_path());
 }
 

@@ -1,12 +1,12 @@
 // JSON loading of the sensor error-model profiles (format in sensor_config.hpp).
 #include "rowloc/sim/sensor_config.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 namespace rowloc::sim {
 namespace {
 
-using Reader = detail::JsonObjectReader<SensorConfigError>;
+using Reader = mapio::detail::JsonObjectReader<SensorConfigError>;
 
 GnssFixQuality ParseFixQuality(Reader& reader, const std::string& key) {
   const std::string text = reader.String(key);
@@ -107,7 +107,7 @@ const Config& FindProfile(const std::map<std::string, Config>& profiles, const s
 
 SensorProfiles ParseSensorProfiles(std::string_view json_text, std::string_view source_name) {
   const std::string source(source_name);
-  const nlohmann::json document = detail::ParseJsonText<SensorConfigError>(json_text, source);
+  const nlohmann::json document = mapio::detail::ParseJsonText<SensorConfigError>(json_text, source);
   Reader root(document, source, "");
   SensorProfiles profiles;
   profiles.gnss = ParseProfiles<GnssConfig>(root, "gnss", ParseGnss);
@@ -119,7 +119,7 @@ SensorProfiles ParseSensorProfiles(std::string_view json_text, std::string_view 
 }
 
 SensorProfiles LoadSensorProfiles(const std::filesystem::path& path) {
-  return ParseSensorProfiles(detail::ReadTextFile<SensorConfigError>(path, "sensor profile file"), path.string());
+  return ParseSensorProfiles(mapio::detail::ReadTextFile<SensorConfigError>(path, "sensor profile file"), path.string());
 }
 
 GnssConfig DefaultGnssRtkConfig() {

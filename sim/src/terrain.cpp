@@ -2,7 +2,7 @@
 
 #include "rowloc/sim/wheel_slip.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <array>
 #include <cmath>
@@ -12,7 +12,7 @@
 namespace rowloc::sim {
 namespace {
 
-using Reader = detail::JsonObjectReader<TerrainConfigError>;
+using Reader = mapio::detail::JsonObjectReader<TerrainConfigError>;
 
 constexpr std::array<const char*, 4> kFieldNames = {
     "traction_coefficient_max", "shear_slip_constant", "rolling_resistance_coefficient",
@@ -103,7 +103,7 @@ const TerrainSlipParams& TerrainSlipTable::At(TerrainClass terrain) const {
 }
 
 TerrainSlipTable ParseTerrainSlipTable(const std::string& json_text, const std::string& source_name) {
-  const nlohmann::json document = detail::ParseJsonText<TerrainConfigError>(json_text, source_name);
+  const nlohmann::json document = mapio::detail::ParseJsonText<TerrainConfigError>(json_text, source_name);
   Reader root(document, source_name, "");
   root.ExpectKeys({"terrains"});
   Reader terrains = root.Object("terrains");
@@ -118,7 +118,7 @@ TerrainSlipTable ParseTerrainSlipTable(const std::string& json_text, const std::
 }
 
 TerrainSlipTable LoadTerrainSlipTable(const std::filesystem::path& path) {
-  return ParseTerrainSlipTable(detail::ReadTextFile<TerrainConfigError>(path, "terrain file"), path.string());
+  return ParseTerrainSlipTable(mapio::detail::ReadTextFile<TerrainConfigError>(path, "terrain file"), path.string());
 }
 
 }  // namespace rowloc::sim

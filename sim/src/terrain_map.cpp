@@ -1,6 +1,6 @@
 #include "rowloc/sim/terrain_map.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 // GCC 12 reports a false "maybe-uninitialized" inside Boost 1.74's rescale policy (instantiated by
 // is_valid); silenced for the Boost headers only. Boost 1.74's geometry still includes a deprecated
@@ -109,7 +109,7 @@ TerrainClass TerrainMap::ClassAt(const Eigen::Vector2d& point_m) const {
 
 namespace {
 
-using Reader = detail::JsonObjectReader<TerrainConfigError>;
+using Reader = mapio::detail::JsonObjectReader<TerrainConfigError>;
 
 TerrainClass ReadTerrain(Reader& reader, const std::string& key) {
   const std::string name = reader.String(key);
@@ -166,7 +166,7 @@ TerrainMap ParseTerrainMap(std::string_view json_object_text, std::string_view s
 TerrainMap ParseTerrainMap(std::string_view json_object_text, std::string_view source_name,
                            std::string_view key_path_prefix) {
   const std::string source(source_name);
-  const nlohmann::json json = detail::ParseJsonText<TerrainConfigError>(json_object_text, source);
+  const nlohmann::json json = mapio::detail::ParseJsonText<TerrainConfigError>(json_object_text, source);
   Reader reader(json, source, std::string(key_path_prefix));
   const TerrainClass default_terrain = ReadTerrain(reader, "default");
   std::vector<TerrainPatch> patches = reader.ObjectArray("patches", ReadPatch, 0, kMaxPatches);

@@ -1,4 +1,4 @@
-#include "rowloc/sim/vehicle_config.hpp"
+#include "rowloc/mapio/vehicle_config.hpp"
 
 #include "test_support.hpp"
 
@@ -11,7 +11,7 @@
 #include <numbers>
 #include <string>
 
-namespace rowloc::sim {
+namespace rowloc::mapio {
 namespace {
 
 using ::testing::AllOf;
@@ -219,4 +219,4 @@ TEST(VehicleConfigProblem, NamesTheField) {
 }
 
 }  // namespace
-}  // namespace rowloc::sim
+}  // namespace rowloc::mapio

@@ -1,4 +1,5 @@
-// Strict reading of JSON configuration objects for the simulator's data files (private to sim/src).
+// Strict reading of JSON configuration objects (simulator scenarios, vehicle and filter files).
+// Internal to rowloc (a detail header of mapio, shared by mapio, sim and localization sources).
 //
 // Every configuration file of the simulator follows the same rules (docs/simulation-scenarios.md):
 // every key is required, unknown keys are rejected (so that a typo never falls back silently to a
@@ -31,7 +32,7 @@
 #include <type_traits>
 #include <vector>
 
-namespace rowloc::sim::detail {
+namespace rowloc::mapio::detail {
 
 /// Parses JSON text; throws Error("<source>: <what>: ...") on a syntax error or a number too large
 /// for a double (`what` is "invalid JSON" unless a file format words it otherwise).
@@ -244,4 +245,4 @@ class JsonObjectReader {
   std::set<std::string> used_;
 };
 
-}  // namespace rowloc::sim::detail
+}  // namespace rowloc::mapio::detail

@@ -1,8 +1,8 @@
 // Parsing, validation and the in-code shipped values of vehicle configurations (format in
 // vehicle_config.hpp; values and their sources in docs/simulation-vehicles.md).
-#include "rowloc/sim/vehicle_config.hpp"
+#include "rowloc/mapio/vehicle_config.hpp"
 
-#include "json_object_reader.hpp"
+#include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <array>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include <set>
 #include <utility>
 
-namespace rowloc::sim {
+namespace rowloc::mapio {
 namespace {
 
 using Reader = detail::JsonObjectReader<VehicleConfigError>;
@@ -252,4 +252,4 @@ VehicleConfig TrackedVehicleConfig() {
   return c;
 }
 
-}  // namespace rowloc::sim
+}  // namespace rowloc::mapio
