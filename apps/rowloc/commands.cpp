@@ -9,6 +9,7 @@ void RegisterCommands(CLI::App& app) {
   RegisterWorldCommand(app);
   RegisterSimulateCommand(app);
   RegisterEvaluateCommand(app);
+  RegisterReplayCommand(app);
 }
 
 }  // namespace rowloc::apps

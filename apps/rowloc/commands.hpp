@@ -14,5 +14,6 @@ void RegisterMappingCommands(CLI::App& app);   // mapping_commands.cpp
 void RegisterWorldCommand(CLI::App& app);      // world_command.cpp
 void RegisterSimulateCommand(CLI::App& app);   // simulate_command.cpp
 void RegisterEvaluateCommand(CLI::App& app);   // evaluate_command.cpp
+void RegisterReplayCommand(CLI::App& app);     // replay_command.cpp
 
 }  // namespace rowloc::apps

@@ -279,6 +279,37 @@ void EstimateLogWriter::Write(const EstimateRecord& r) {
       for (int col = 0; col < n; ++col) values.push_back(c(row, col));
     j["covariance_xy_phi"] = values;
   }
+  if (!r.slip.empty()) {
+    ordered_json slip = ordered_json::object();
+    for (const auto& [wheel, value] : r.slip) {
+      if (wheel.empty() || slip.contains(wheel)) Refuse(type, "slip wheel names must be unique and non-empty");
+      slip[wheel] = Finite(type, "slip", value);
+    }
+    j["slip"] = slip;
+  }
+  out_ << j.dump() << '\n';
+  if (!out_) throw std::runtime_error("estimate log: write failed");
+  last_time_s_ = r.time_s;
+}
+
+void EstimateLogWriter::WriteUpdate(const UpdateLogRecord& r) {
+  const char* type = "update";
+  CheckTimeOrder(type, r.time_s, last_time_s_);
+  const Eigen::Index m = r.innovation.size();
+  if (r.sensor.empty()) Refuse(type, "sensor name is empty");
+  if (m == 0 || r.innovation_covariance.rows() != m || r.innovation_covariance.cols() != m) {
+    Refuse(type, "innovation and innovation_covariance sizes do not match");
+  }
+  if (!r.innovation.allFinite() || !r.innovation_covariance.allFinite()) Refuse(type, "innovation is not finite");
+  ordered_json j = MessageStart(type, r.time_s);
+  j["sensor"] = r.sensor;
+  j["innovation"] = std::vector<double>(r.innovation.data(), r.innovation.data() + m);
+  ordered_json s = ordered_json::array();
+  for (Eigen::Index row = 0; row < m; ++row)
+    for (Eigen::Index col = 0; col < m; ++col) s.push_back(r.innovation_covariance(row, col));
+  j["innovation_covariance"] = s;
+  j["nis"] = Finite(type, "nis", r.nis);
+  j["accepted"] = r.accepted;
   out_ << j.dump() << '\n';
   if (!out_) throw std::runtime_error("estimate log: write failed");
   last_time_s_ = r.time_s;

@@ -31,7 +31,10 @@
 // exact flow V cannot grow for any h (V' = -e^T L e), so V is non-increasing at the sample times
 // on exact arc data whatever the rate, and errors are never amplified (the homogeneous part is
 // non-expansive in the V-norm). The heading change dtheta is the 2 pi branch of the measured one
-// nearest to the change predicted by eta^ (so a gap with more than half a turn is not aliased).
+// nearest to the change predicted by eta^, moved into the range reachable with eta in the box when
+// a branch lies there; it is unique when h (eta_max - eta_min)(|v_R| + |v_L|) / (2d) < 2 pi (default
+// box, 1 m/s tracks, 2d = 1.1 m: h < 1.7 s), beyond that a turn of more than pi per step relies on
+// eta^ predicting it to within pi.
 // Projection: eta^ is clamped into [eta_min, eta_max] after every step; for the diagonal Lambda^-1
 // norm that is the Euclidean projection onto the box, so it cannot increase V when the true eta
 // lies in the box. Steps longer than max_step_s are gaps: the pose state restarts at the
@@ -64,6 +67,9 @@ struct TrackSlipObserverConfig {
 /// Why the config is unusable (names the field), or nullopt.
 std::optional<std::string> TrackSlipObserverConfigProblem(const TrackSlipObserverConfig& config);
 
+/// Track speeds beyond this are rejected as corrupt (no tracked vehicle is that fast).
+inline constexpr double kMaxTrackSpeedMps = 100.0;
+
 /// One measurement: planar pose of the reference point (midway between the tracks) in the world
 /// frame and the two track speeds r omega (sprocket speed times sprocket radius, signed).
 struct TrackSlipInput {
@@ -71,7 +77,7 @@ struct TrackSlipInput {
   double x_m = 0.0;
   double y_m = 0.0;
   double theta_rad = 0.0;  ///< heading from +x (East), counter-clockwise; any finite value
-  double v_right_mps = 0.0;
+  double v_right_mps = 0.0;  ///< |v| <= kMaxTrackSpeedMps
   double v_left_mps = 0.0;
 };
 
@@ -89,7 +95,8 @@ class TrackSlipObserver {
   explicit TrackSlipObserver(const TrackSlipObserverConfig& config = {});
 
   /// Integrates the observer to input.time_s. Throws std::invalid_argument naming the field for a
-  /// non-finite value or a time before the previous one; the state is then unchanged.
+  /// non-finite value, a track speed beyond kMaxTrackSpeedMps or a time before the previous one
+  /// (and for a step whose numbers overflow, e.g. positions near 1e308); the state is then unchanged.
   TrackSlipStep Update(const TrackSlipInput& input);
 
   /// Back to the uninitialised state with eta^ = the configured initial values.
@@ -115,6 +122,7 @@ class TrackSlipObserver {
  private:
   void Initialise(const TrackSlipInput& input);
   void Integrate(const TrackSlipInput& input, double step_s);
+  double TurnOverStep(const TrackSlipInput& input, double step_s, double v_right, double v_left) const;
 
   TrackSlipObserverConfig config_;
   bool initialised_ = false;

@@ -144,9 +144,21 @@ struct EstimateRecord {
   std::optional<double> heading_rad;
   /// Covariance of (x, y, phi) when heading_rad is set, of (x, y) otherwise (top-left block used).
   std::optional<Eigen::Matrix3d> covariance;
+  /// Estimated slip per wheel name (SAE slip, or track slip i), written as `slip` when not empty.
+  std::vector<std::pair<std::string, double>> slip;
 };
 
-/// Writes an estimate stream (docs/protocol.md §3) with estimate lines only.
+/// One measurement update (docs/protocol.md §3 `update` line).
+struct UpdateLogRecord {
+  double time_s = 0.0;
+  std::string sensor;
+  Eigen::VectorXd innovation;             ///< length m >= 1
+  Eigen::MatrixXd innovation_covariance;  ///< m x m, symmetric
+  double nis = 0.0;                       ///< y^T S^-1 y, finite
+  bool accepted = false;
+};
+
+/// Writes an estimate stream (docs/protocol.md §3): estimate and update lines.
 class EstimateLogWriter {
  public:
   EstimateLogWriter(std::ostream& out, const std::string& source, const std::string& vehicle,
@@ -154,6 +166,9 @@ class EstimateLogWriter {
   /// Throws std::invalid_argument for non-finite values, time going backwards, or a covariance
   /// that is not symmetric and positive semi-definite (up to round-off).
   void Write(const EstimateRecord& record);
+  /// An `update` line; same time order as the estimate lines. Throws std::invalid_argument for
+  /// an empty sensor name, sizes that do not match or non-finite innovation/covariance/NIS.
+  void WriteUpdate(const UpdateLogRecord& record);
 
  private:
   std::ostream& out_;

@@ -1,0 +1,123 @@
+// Configuration of the vehicle EKF as data (issue 4, "Configuration ... from a file, with clear
+// errors"; SPEC §6). Vehicle geometry comes from the vehicle file (rowloc/mapio/vehicle_config.hpp);
+// this file holds the noise figures, process noise, gates and options of the filter.
+//
+// Units and meaning (all 1-sigma; "per sqrt(Hz)" is a continuous white-noise spectral density q,
+// discretized as q^2 dt; docs/localization-filter.md explains each choice):
+//   process_noise.jerk_mps3_per_sqrt_hz            drives a_Bx, a_By (random walk)
+//   process_noise.yaw_acceleration_radps2_per_sqrt_hz drives phi_dot
+//   process_noise.velocity_mps_per_sqrt_hz         small direct velocity noise (unmodelled forces)
+//   process_noise.steering_rate_radps_per_sqrt_hz  drives each delta
+//   process_noise.gyro_bias_radps_per_sqrt_hz      drives b_g (the IMU's bias random walk)
+//   slip_aware_odometry.*_per_sqrt_m               seed 004: R_w and k_s random walks whose variance
+//                                                  grows with the distance the wheel rolled
+// Gates are probabilities p: a measurement of dimension m is rejected when its NIS exceeds the
+// chi-square quantile Q(m, p) (SPEC §6 "chi-square gating of outliers").
+//
+// File format (config/filters/*.json): every key required, unknown keys rejected, errors name the
+// source, the key path and the reason (the same strict reader as the simulator's files).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace rowloc::localization {
+
+struct ProcessNoise {
+  double jerk_mps3_per_sqrt_hz = 2.0;
+  double yaw_acceleration_radps2_per_sqrt_hz = 1.0;
+  double velocity_mps_per_sqrt_hz = 0.02;
+  double steering_rate_radps_per_sqrt_hz = 0.5;
+  double gyro_bias_radps_per_sqrt_hz = 2e-5;
+};
+
+/// Seed 004: rolling radius R_w and torque/slip gradient k_s of every wheel as EKF states.
+struct SlipAwareOdometryConfig {
+  bool enabled = false;
+  double rolling_radius_sigma_m = 0.01;             ///< initial sigma of R_w around the nominal radius
+  double slip_gradient_initial_nm = 500.0;          ///< initial k_s (torque per unit slip), > 0
+  double slip_gradient_sigma_nm = 250.0;            ///< its initial sigma
+  double min_slip_gradient_nm = 1.0;                ///< k_s is clamped above max(this, |T| + this)
+  double rolling_radius_noise_m_per_sqrt_m = 1e-4;  ///< R_w random walk per sqrt(metre rolled)
+  double slip_gradient_noise_nm_per_sqrt_m = 5.0;   ///< k_s random walk per sqrt(metre rolled)
+};
+
+/// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).
+struct InitialisationConfig {
+  double heading_baseline_m = 2.0;   ///< GNSS displacement that fixes the initial heading, > 0
+  double heading_sigma_rad = 0.2;
+  double velocity_sigma_mps = 0.3;
+  double yaw_rate_sigma_radps = 0.1;
+  double acceleration_sigma_mps2 = 0.5;
+  double gyro_bias_sigma_radps = 0.005;
+  double steering_sigma_rad = 0.05;
+};
+
+struct GpsNoise {
+  double sigma_scale = 1.0;      ///< multiplies the receiver's sigma_horizontal_m, > 0
+  double sigma_floor_m = 0.005;  ///< lower bound of the used sigma, > 0
+  double gate_probability = 0.9999;
+  /// When every fix for longer than this (s) was gated out, the filter has drifted (not the receiver):
+  /// the next fix re-acquires, P's position block is inflated by y y^T and the fix applied ungated.
+  double reacquire_after_s = 10.0;
+};
+
+struct ImuNoise {
+  double accel_sigma_mps2 = 0.05;  ///< per axis, per sample (white noise + unmodelled bias)
+  double gyro_sigma_radps = 0.003;
+  double gate_probability = 0.9999;
+};
+
+struct WheelNoise {
+  double speed_sigma_radps = 0.1;  ///< per wheel, per sample (quantization, noise)
+  /// Relative part: sigma_i^2 = speed_sigma_radps^2 + (speed_sigma_fraction omega_i)^2 (slip that
+  /// the model does not capture: use the slip range of the terrain without slip-aware odometry).
+  double speed_sigma_fraction = 0.02;
+  double gate_probability = 0.9999;
+  double max_speed_radps = 200.0;  ///< larger |omega| is rejected as out of range
+};
+
+struct SteeringNoise {
+  double angle_sigma_rad = 0.002;
+  double gate_probability = 0.9999;
+};
+
+struct VioNoise {
+  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();  ///< camera lever arm, body frame
+  double sigma_scale = 1.0;
+  double gate_probability = 0.9999;
+};
+
+struct FilterConfig {
+  std::string name = "default";
+  ProcessNoise process_noise;
+  SlipAwareOdometryConfig slip_aware_odometry;
+  InitialisationConfig initialisation;
+  GpsNoise gps;
+  ImuNoise imu;
+  WheelNoise wheels;
+  SteeringNoise steering;
+  VioNoise vio;
+  double max_prediction_step_s = 0.02;  ///< longer predictions are split into steps of at most this
+  double max_prediction_gap_s = 5.0;    ///< a longer gap between messages is an error (clock fault)
+};
+
+class FilterConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Why the configuration is unusable (naming the field), or nullopt.
+std::optional<std::string> FilterConfigProblem(const FilterConfig& config);
+
+/// Parses a filter file's text; source_name appears in the messages. Throws FilterConfigError.
+FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name);
+/// Reads and parses a filter file. Throws FilterConfigError (including for a missing file).
+FilterConfig LoadFilterConfig(const std::filesystem::path& path);
+
+}  // namespace rowloc::localization

@@ -1,0 +1,40 @@
+// One Kalman measurement update in Joseph form with chi-square gating (SPEC §6 "Filter": sequential
+// updates per sensor, Joseph-form covariance update, P kept symmetric positive definite,
+// chi-square gating of outliers, NIS for every update).
+//
+// Given the innovation y = z - h(x), its Jacobian H and the measurement noise R:
+//   S   = H P H^T + R,           NIS = y^T S^-1 y   (chi-square with m = dim(y) degrees of freedom)
+//   rejected when NIS > gate (the state and P are then unchanged), else
+//   K   = P H^T S^-1,            x  <- x + K y
+//   P   <- (I - K H) P (I - K H)^T + K R K^T           (Joseph, Bucy & Joseph 1968; Bar-Shalom,
+//                                                       Li & Kirubarajan 2001, eq. 5.2.3-18)
+// computed as A = P - K (H P), P <- A - (A H^T) K^T + K R K^T (O(n^2 m) instead of O(n^3)), then
+// symmetrized. The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
+#pragma once
+
+#include <Eigen/Core>
+
+namespace rowloc::localization {
+
+struct UpdateOutcome {
+  Eigen::VectorXd innovation;             ///< y = z - h(x) (angles wrapped by the caller)
+  Eigen::MatrixXd innovation_covariance;  ///< S
+  double nis = 0.0;                       ///< y^T S^-1 y
+  bool accepted = false;                  ///< false: gated out (or S not positive definite)
+};
+
+/// Applies the update to (state, covariance) unless gated. gate_threshold is the NIS above which
+/// the measurement is rejected (+infinity: never). angle_index < 0: no angle state to wrap.
+/// Throws std::invalid_argument on mismatched sizes or non-finite inputs (innovation, H, R).
+UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
+                           const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
+                           const Eigen::MatrixXd& noise, double gate_threshold, int angle_index);
+
+/// The chi-square quantile Q(dof, probability) (Boost.Math), the gate for that probability.
+/// Throws std::invalid_argument for dof < 1 or probability outside (0, 1).
+double ChiSquareGate(int dof, double probability);
+
+/// Wraps an angle to (-pi, pi] (SPEC §3).
+double WrapAngle(double angle_rad);
+
+}  // namespace rowloc::localization

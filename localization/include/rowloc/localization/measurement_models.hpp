@@ -1,0 +1,60 @@
+// Measurement models of the vehicle EKF: predicted measurement h(x) and its Jacobian H = dh/dx,
+// analytic, tested against central differences (SPEC §6 "Sensors"; seed 000 ch. 6; seed 004 §3).
+// x is laid out by StateLayout; R(phi) is the planar rotation by the heading; l a lever arm
+// (body frame, metres); r the yaw rate.
+//
+// GPS antenna (position, local ENU):  h = [X, Y] + R(phi) l_gnss
+// IMU (specific force at the IMU, yaw rate), l = l_imu:
+//   h = [ax - r^2 l_x, ay - r^2 l_y, r + b_g]
+//   (the centripetal term of a rigid body; the tangential term r' x l is not modelled since r' is
+//   not a state: it is part of the IMU noise)
+// Wheel i at l_i with steering delta_i (0 for a fixed wheel or track):
+//   v_i   = cos(delta_i) (vx - r l_iy) + sin(delta_i) (vy + r l_ix)   (wheel-centre velocity along
+//                                                                       the wheel heading)
+//   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
+//   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eq. (18):
+//           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque)
+// Steering encoder of wheel i:   h = delta_i
+// Visual odometry at the camera l_c:   h = [vx - r l_cy, vy + r l_cx]
+#pragma once
+
+#include "rowloc/localization/state_layout.hpp"
+#include "rowloc/mapio/vehicle_config.hpp"
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <vector>
+
+namespace rowloc::localization {
+
+struct LinearizedMeasurement {
+  Eigen::VectorXd predicted;  ///< h(x)
+  Eigen::MatrixXd jacobian;   ///< dh/dx, rows = measurement dimension, cols = state size
+};
+
+LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+
+LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+
+/// Longitudinal wheel-centre velocity v_i (m/s) of wheel `index` (see the header comment).
+double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                 const StateLayout& layout, std::size_t index);
+
+/// Rolling radius used for wheel `index`: the state R_i with slip-aware odometry, else nominal.
+double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                          const StateLayout& layout, std::size_t index);
+
+/// All wheels in vehicle order (rad/s). torque_nm: one per wheel, used by the slip-aware model
+/// only (absent: T = 0, the odometer model reduces to v / R).
+LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                      const StateLayout& layout,
+                                      const std::optional<std::vector<double>>& torque_nm);
+
+/// Steering angles of the given wheels (indices into the vehicle's wheels; each must be steerable).
+LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
+                                    const std::vector<std::size_t>& wheels);
+
+LinearizedMeasurement VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+
+}  // namespace rowloc::localization

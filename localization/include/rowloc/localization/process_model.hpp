@@ -1,0 +1,41 @@
+// Process model of the vehicle EKF (seed 000 ch. 4 and 6, the AgriMaRo constant-acceleration
+// model; SPEC §6 and §10).
+//
+// Continuous time, body-frame velocity v_B = (vx, vy), yaw rate r, body acceleration a_B:
+//   X'   = vx cos(phi) - vy sin(phi)        Y' = vx sin(phi) + vy cos(phi)        phi' = r
+//   vx'  = ax + r vy                          vy' = ay - r vx
+//   r', ax', ay', delta_i', b_g', R_w', k_s' = white noise (random walks)
+// Seed 000 writes the velocity step as v_Bx + T (a_Bx - phi_dot v_By); with a_B the IMU's
+// acceleration the body-frame velocity obeys the signs above (SPEC §10 erratum; fixed here).
+// Seed 000's discrete model also uses the step T of its own loop; here every step uses the
+// actual time since the previous measurement (SPEC §10: "use the sampling time").
+//
+// Discretization over dt (split by the caller into steps <= FilterConfig::max_prediction_step_s):
+// explicit Euler for the velocities, and the mid-step heading phi + r dt / 2 for the position (exact
+// for a constant-speed arc to O(dt^3)). F = df/dx is analytic (tested against central differences).
+// Process noise: Q = diag(q_v^2, q_v^2, q_r^2, q_a^2, q_a^2, q_b^2, q_delta^2 ...) dt on
+// (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states of seed 004 (§3.2) a variance
+// growing with the distance d_i = |v_i| dt wheel i rolled in the step: q_R^2 d_i, q_k^2 d_i.
+// Since F is the identity outside the 9 base states, P <- F P F^T + Q costs O(9^2 n).
+#pragma once
+
+#include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/state_layout.hpp"
+#include "rowloc/mapio/vehicle_config.hpp"
+
+#include <Eigen/Core>
+
+namespace rowloc::localization {
+
+using BaseJacobian = Eigen::Matrix<double, StateLayout::kBaseSize, StateLayout::kBaseSize>;
+
+/// One step of the noise-free model: state <- f(state, dt); returns F restricted to the base states
+/// (F is the identity elsewhere). dt >= 0, finite (checked by the caller).
+BaseJacobian PropagateState(Eigen::VectorXd& state, double dt_s);
+
+/// The full prediction step: propagates state and covariance by dt_s (one step, no splitting) and
+/// adds the process noise. The heading is wrapped.
+void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
+                 Eigen::VectorXd& state, Eigen::MatrixXd& covariance, double dt_s);
+
+}  // namespace rowloc::localization

@@ -1,0 +1,49 @@
+// Layout of the vehicle EKF state (SPEC §6 "Filter"; seed 000 ch. 4 and 6, the 12-state AgriMaRo
+// design, extended per vehicle kind and with the slip-aware augmented states of seed 004).
+//
+// Index  name         unit     meaning
+//   0    x_m          m        reference point, local ENU east
+//   1    y_m          m        reference point, local ENU north
+//   2    phi_rad      rad      heading from +east, counter-clockwise, wrapped to (-pi, pi]
+//   3    vx_mps       m/s      body-frame velocity of the reference point, forward (v_Bx)
+//   4    vy_mps       m/s      body-frame velocity, left (v_By)
+//   5    r_radps      rad/s    yaw rate (phi_dot)
+//   6    ax_mps2      m/s^2    body-frame acceleration (a_Bx) = IMU specific force at the reference point
+//   7    ay_mps2      m/s^2    body-frame acceleration (a_By)
+//   8    bg_radps     rad/s    gyro bias (b_g)
+//   then, per steerable wheel in vehicle-config order:        delta_<wheel> (rad)
+//   then, with slip-aware odometry, per wheel in config order: R_<wheel> (m), k_<wheel> (N m)
+// Seed 000 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
+// gyro bias is moved before the steering angles here so that the base block has the same indices
+// for every vehicle kind (a swerve robot has 3 steering states, a 4WS vehicle 4, the others none).
+#pragma once
+
+#include "rowloc/mapio/vehicle_config.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace rowloc::localization {
+
+/// Index of each state; -1 where a wheel has no such state.
+struct StateLayout {
+  static constexpr int kX = 0, kY = 1, kPhi = 2, kVx = 3, kVy = 4, kYawRate = 5, kAx = 6, kAy = 7,
+                       kGyroBias = 8, kBaseSize = 9;
+
+  std::vector<int> steering;        ///< per wheel: index of delta, or -1 (not steerable)
+  std::vector<int> rolling_radius;  ///< per wheel: index of R_w, or -1 (no slip-aware odometry)
+  std::vector<int> slip_gradient;   ///< per wheel: index of k_s, or -1
+  int size = kBaseSize;
+
+  /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
+  /// a rolling radius and a torque/slip gradient per wheel (or track).
+  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry);
+
+  /// Names of the states in index order, e.g. "x_m", "delta_front", "R_rear_left" (for messages).
+  std::vector<std::string> Names(const mapio::VehicleConfig& vehicle) const;
+  std::size_t wheel_count() const { return steering.size(); }
+  bool slip_aware() const { return !rolling_radius.empty() && rolling_radius.front() >= 0; }
+};
+
+}  // namespace rowloc::localization

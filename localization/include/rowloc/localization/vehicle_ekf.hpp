@@ -1,0 +1,118 @@
+// The vehicle EKF: GPS, IMU, wheel encoders, steering encoders and visual odometry fused over the
+// state of StateLayout (issue 4; SPEC §6 "Filter"; seed 000 ch. 4 and 6; seed 004 for the
+// slip-aware odometry). docs/localization-filter.md describes the whole filter.
+//
+// Each message is processed in time order: the state is predicted to the message's time stamp
+// (process_model.hpp, in steps of at most max_prediction_step_s), then the message's measurement
+// is applied as one sequential update (kalman_update.hpp: Joseph form, chi-square gate, NIS).
+// Initialisation (docs/localization-filter.md §2): the heading is not observable from one GNSS fix,
+// so the filter waits until the antenna has moved heading_baseline_m from the first fix and takes
+// the course of that displacement (corrected by the mean steering angle, reversed when the wheels
+// turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic messages
+// are not used here (the map-aided update is issue 5).
+//
+// Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
+// max_speed_radps, |delta| above the vehicle's limit + 0.1 rad), a wheel count that does not match
+// and time going backwards throw FilterInputError and leave the filter unchanged. A gap longer than
+// max_prediction_gap_s is a clock or logging fault: the filter drops its state and re-initialises
+// (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
+// out, the filter (not the receiver) is taken to have drifted: the position covariance is inflated
+// by the innovation's outer product and the fix is applied (reported as a notice).
+#pragma once
+
+#include "rowloc/geometry/row_map.hpp"
+#include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/kalman_update.hpp"
+#include "rowloc/localization/sensor_messages.hpp"
+#include "rowloc/localization/state_layout.hpp"
+#include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/vehicle_config.hpp"
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rowloc::localization {
+
+class FilterInputError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+struct UpdateRecord {
+  double time_s = 0.0;
+  std::string sensor;  ///< "gnss", "imu", "wheels", "steering" or "vio" (the message's sensor name)
+  UpdateOutcome outcome;
+};
+
+struct ProcessResult {
+  std::vector<UpdateRecord> updates;  ///< the updates made (none before initialisation)
+  std::optional<std::string> notice;  ///< initialisation, re-initialisation after a gap
+};
+
+class VehicleEkf {
+ public:
+  /// wheel_order: the wheel names of the messages (the log header's), a permutation of the
+  /// vehicle's wheel names. Throws FilterConfigError / std::invalid_argument on a bad config,
+  /// origin or wheel order.
+  VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const geometry::GeoOrigin& origin,
+             const std::vector<std::string>& wheel_order);
+
+  /// Predicts to the message's time and applies it. Throws FilterInputError (filter unchanged).
+  ProcessResult Process(const SensorMessage& message);
+
+  /// Initialises (or overrides) the pose (x, y, phi) with its covariance at time_s; velocities and
+  /// the other states keep their values (zero and the initial sigmas when not yet initialised).
+  void SetPose(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance);
+  /// Back to the uninitialised state (keeps configuration and time).
+  void Reset();
+
+  bool initialised() const { return initialised_; }
+  double time_s() const { return time_s_; }
+  const Eigen::VectorXd& state() const { return x_; }
+  const Eigen::MatrixXd& covariance() const { return p_; }
+  const StateLayout& layout() const { return layout_; }
+  const mapio::VehicleConfig& vehicle() const { return vehicle_; }
+  const FilterConfig& config() const { return config_; }
+
+  /// SAE slip per wheel (vehicle order) from the state and the last raw encoder speeds; empty before
+  /// the first wheels message or initialisation.
+  std::vector<double> WheelSlip() const;
+
+ private:
+  void Validate(const SensorMessage& message) const;
+  void PredictTo(double time_s);
+  ProcessResult Apply(const GpsMessage& gps);
+  ProcessResult Apply(const ImuMessage& imu);
+  ProcessResult Apply(const WheelsMessage& wheels);
+  ProcessResult Apply(const SteeringMessage& steering);
+  ProcessResult Apply(const VioMessage& vio);
+  ProcessResult Apply(const UltrasonicMessage&) { return {}; }
+  std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
+  void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
+  void ProjectSlipStates();
+  UpdateRecord Update(double time_s, const std::string& sensor, const Eigen::VectorXd& innovation,
+                      const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate);
+
+  mapio::VehicleConfig vehicle_;
+  FilterConfig config_;
+  StateLayout layout_;
+  mapio::LocalFrame frame_;
+  std::vector<std::size_t> wheel_index_;  ///< message wheel j -> vehicle wheel wheel_index_[j]
+  double gate_gps_, gate_imu_, gate_vio_;
+
+  bool initialised_ = false;
+  double time_s_ = -std::numeric_limits<double>::infinity();
+  Eigen::VectorXd x_;
+  Eigen::MatrixXd p_;
+  std::optional<double> gps_gated_since_s_;   ///< first gated fix since the last accepted one
+  std::optional<Eigen::Vector2d> anchor_enu_;  ///< first antenna fix while waiting for the heading
+  std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
+  std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
+  std::vector<std::optional<double>> last_steering_rad_;
+};
+
+}  // namespace rowloc::localization

@@ -1,0 +1,155 @@
+// Filter configuration files (filter_config.hpp). The reader checks types and key sets; every
+// value rule lives in FilterConfigProblem so that in-code and file configurations obey the same.
+#include "rowloc/localization/filter_config.hpp"
+
+#include "rowloc/mapio/detail/json_object_reader.hpp"
+
+#include <cmath>
+#include <vector>
+
+namespace rowloc::localization {
+namespace {
+
+using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
+
+bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
+bool IsProbability(double value) { return std::isfinite(value) && value > 0.0 && value < 1.0; }
+
+/// (key path, value, must be a probability instead of positive)
+struct Rule {
+  const char* key;
+  double value;
+  bool probability = false;
+};
+
+std::vector<Rule> Rules(const FilterConfig& c) {
+  const ProcessNoise& q = c.process_noise;
+  const SlipAwareOdometryConfig& s = c.slip_aware_odometry;
+  const InitialisationConfig& i = c.initialisation;
+  return {
+      {"process_noise.jerk_mps3_per_sqrt_hz", q.jerk_mps3_per_sqrt_hz},
+      {"process_noise.yaw_acceleration_radps2_per_sqrt_hz", q.yaw_acceleration_radps2_per_sqrt_hz},
+      {"process_noise.velocity_mps_per_sqrt_hz", q.velocity_mps_per_sqrt_hz},
+      {"process_noise.steering_rate_radps_per_sqrt_hz", q.steering_rate_radps_per_sqrt_hz},
+      {"process_noise.gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz},
+      {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m},
+      {"slip_aware_odometry.slip_gradient_initial_nm", s.slip_gradient_initial_nm},
+      {"slip_aware_odometry.slip_gradient_sigma_nm", s.slip_gradient_sigma_nm},
+      {"slip_aware_odometry.min_slip_gradient_nm", s.min_slip_gradient_nm},
+      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m},
+      {"slip_aware_odometry.slip_gradient_noise_nm_per_sqrt_m", s.slip_gradient_noise_nm_per_sqrt_m},
+      {"initialisation.heading_baseline_m", i.heading_baseline_m},
+      {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
+      {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps},
+      {"initialisation.yaw_rate_sigma_radps", i.yaw_rate_sigma_radps},
+      {"initialisation.acceleration_sigma_mps2", i.acceleration_sigma_mps2},
+      {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
+      {"initialisation.steering_sigma_rad", i.steering_sigma_rad},
+      {"gps.sigma_scale", c.gps.sigma_scale},
+      {"gps.sigma_floor_m", c.gps.sigma_floor_m},
+      {"gps.gate_probability", c.gps.gate_probability, true},
+      {"gps.reacquire_after_s", c.gps.reacquire_after_s},
+      {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2},
+      {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps},
+      {"imu.gate_probability", c.imu.gate_probability, true},
+      {"wheels.speed_sigma_radps", c.wheels.speed_sigma_radps},
+      {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction},
+      {"wheels.gate_probability", c.wheels.gate_probability, true},
+      {"wheels.max_speed_radps", c.wheels.max_speed_radps},
+      {"steering.angle_sigma_rad", c.steering.angle_sigma_rad},
+      {"steering.gate_probability", c.steering.gate_probability, true},
+      {"vio.sigma_scale", c.vio.sigma_scale},
+      {"vio.gate_probability", c.vio.gate_probability, true},
+      {"max_prediction_step_s", c.max_prediction_step_s},
+      {"max_prediction_gap_s", c.max_prediction_gap_s},
+  };
+}
+
+FilterConfig ReadConfig(Reader& root) {
+  FilterConfig c;
+  c.name = root.String("name");
+  {
+    Reader q = root.Object("process_noise");
+    c.process_noise = {q.Number("jerk_mps3_per_sqrt_hz"), q.Number("yaw_acceleration_radps2_per_sqrt_hz"),
+                       q.Number("velocity_mps_per_sqrt_hz"), q.Number("steering_rate_radps_per_sqrt_hz"),
+                       q.Number("gyro_bias_radps_per_sqrt_hz")};
+    q.RejectUnknownKeys();
+  }
+  {
+    Reader s = root.Object("slip_aware_odometry");
+    c.slip_aware_odometry = {s.Bool("enabled"), s.Number("rolling_radius_sigma_m"),
+                             s.Number("slip_gradient_initial_nm"), s.Number("slip_gradient_sigma_nm"),
+                             s.Number("min_slip_gradient_nm"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
+                             s.Number("slip_gradient_noise_nm_per_sqrt_m")};
+    s.RejectUnknownKeys();
+  }
+  {
+    Reader i = root.Object("initialisation");
+    c.initialisation = {i.Number("heading_baseline_m"),     i.Number("heading_sigma_rad"),
+                        i.Number("velocity_sigma_mps"),     i.Number("yaw_rate_sigma_radps"),
+                        i.Number("acceleration_sigma_mps2"), i.Number("gyro_bias_sigma_radps"),
+                        i.Number("steering_sigma_rad")};
+    i.RejectUnknownKeys();
+  }
+  {
+    Reader g = root.Object("gps");
+    c.gps = {g.Number("sigma_scale"), g.Number("sigma_floor_m"), g.Number("gate_probability"),
+             g.Number("reacquire_after_s")};
+    g.RejectUnknownKeys();
+  }
+  {
+    Reader m = root.Object("imu");
+    c.imu = {m.Number("accel_sigma_mps2"), m.Number("gyro_sigma_radps"), m.Number("gate_probability")};
+    m.RejectUnknownKeys();
+  }
+  {
+    Reader w = root.Object("wheels");
+    c.wheels = {w.Number("speed_sigma_radps"), w.Number("speed_sigma_fraction"), w.Number("gate_probability"),
+                w.Number("max_speed_radps")};
+    w.RejectUnknownKeys();
+  }
+  {
+    Reader s = root.Object("steering");
+    c.steering = {s.Number("angle_sigma_rad"), s.Number("gate_probability")};
+    s.RejectUnknownKeys();
+  }
+  {
+    Reader v = root.Object("vio");
+    c.vio = {v.Vector<2>("position_m"), v.Number("sigma_scale"), v.Number("gate_probability")};
+    v.RejectUnknownKeys();
+  }
+  c.max_prediction_step_s = root.Number("max_prediction_step_s");
+  c.max_prediction_gap_s = root.Number("max_prediction_gap_s");
+  root.RejectUnknownKeys();
+  return c;
+}
+
+}  // namespace
+
+std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
+  if (config.name.empty()) return std::string("name must not be empty");
+  for (const Rule& rule : Rules(config)) {
+    if (rule.probability && !IsProbability(rule.value)) return std::string(rule.key) + " must be in (0, 1)";
+    if (!rule.probability && !IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
+  }
+  if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
+  if (config.max_prediction_gap_s < config.max_prediction_step_s) {
+    return std::string("max_prediction_gap_s must be >= max_prediction_step_s");
+  }
+  return std::nullopt;
+}
+
+FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name) {
+  const std::string source(source_name);
+  const nlohmann::json document = mapio::detail::ParseJsonText<FilterConfigError>(json_text, source);
+  Reader root(document, source, "");
+  FilterConfig config = ReadConfig(root);
+  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError(source + ": " + *problem);
+  return config;
+}
+
+FilterConfig LoadFilterConfig(const std::filesystem::path& path) {
+  return ParseFilterConfig(mapio::detail::ReadTextFile<FilterConfigError>(path, "filter file"), path.string());
+}
+
+}  // namespace rowloc::localization

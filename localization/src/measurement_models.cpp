@@ -1,0 +1,115 @@
+#include "rowloc/localization/measurement_models.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace rowloc::localization {
+
+using L = StateLayout;
+
+namespace {
+
+LinearizedMeasurement Zeros(Eigen::Index rows, Eigen::Index cols) {
+  return {Eigen::VectorXd::Zero(rows), Eigen::MatrixXd::Zero(rows, cols)};
+}
+
+double SteeringAngle(const Eigen::VectorXd& x, const StateLayout& layout, std::size_t i) {
+  return layout.steering[i] >= 0 ? x(layout.steering[i]) : 0.0;
+}
+
+}  // namespace
+
+LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
+  LinearizedMeasurement m = Zeros(2, x.size());
+  const double c = std::cos(x(L::kPhi)), s = std::sin(x(L::kPhi));
+  m.predicted << x(L::kX) + c * l.x() - s * l.y(), x(L::kY) + s * l.x() + c * l.y();
+  m.jacobian(0, L::kX) = 1.0;
+  m.jacobian(1, L::kY) = 1.0;
+  m.jacobian(0, L::kPhi) = -s * l.x() - c * l.y();
+  m.jacobian(1, L::kPhi) = c * l.x() - s * l.y();
+  return m;
+}
+
+LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
+  LinearizedMeasurement m = Zeros(3, x.size());
+  const double r = x(L::kYawRate);
+  m.predicted << x(L::kAx) - r * r * l.x(), x(L::kAy) - r * r * l.y(), r + x(L::kGyroBias);
+  m.jacobian(0, L::kAx) = 1.0;
+  m.jacobian(0, L::kYawRate) = -2.0 * r * l.x();
+  m.jacobian(1, L::kAy) = 1.0;
+  m.jacobian(1, L::kYawRate) = -2.0 * r * l.y();
+  m.jacobian(2, L::kYawRate) = 1.0;
+  m.jacobian(2, L::kGyroBias) = 1.0;
+  return m;
+}
+
+double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                 const StateLayout& layout, std::size_t i) {
+  const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
+  const double r = x(L::kYawRate);
+  const double delta = SteeringAngle(x, layout, i);
+  return std::cos(delta) * (x(L::kVx) - r * l.y()) + std::sin(delta) * (x(L::kVy) + r * l.x());
+}
+
+double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                          const StateLayout& layout, std::size_t i) {
+  return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
+}
+
+LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                      const StateLayout& layout,
+                                      const std::optional<std::vector<double>>& torque_nm) {
+  const std::size_t n = vehicle.wheels.size();
+  if (torque_nm && torque_nm->size() != n) throw std::invalid_argument("wheel model: one torque per wheel");
+  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
+  const double r = x(L::kYawRate);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
+    const double delta = SteeringAngle(x, layout, i);
+    const double c = std::cos(delta), s = std::sin(delta);
+    const double along_x = x(L::kVx) - r * l.y(), along_y = x(L::kVy) + r * l.x();
+    const double v = c * along_x + s * along_y;
+    const double radius = WheelRollingRadius(x, vehicle, layout, i);
+    double gain = 1.0;  // k / (k - T)
+    if (layout.slip_aware()) {
+      const double k = x(layout.slip_gradient[i]);
+      const double torque = torque_nm ? (*torque_nm)[i] : 0.0;
+      gain = k / (k - torque);
+      m.jacobian(row, layout.slip_gradient[i]) = v / radius * (-torque / ((k - torque) * (k - torque)));
+      m.jacobian(row, layout.rolling_radius[i]) = -v * gain / (radius * radius);
+    }
+    const double dv = gain / radius;  // d h / d v
+    m.predicted(row) = v * dv;
+    m.jacobian(row, L::kVx) = dv * c;
+    m.jacobian(row, L::kVy) = dv * s;
+    m.jacobian(row, L::kYawRate) = dv * (-c * l.y() + s * l.x());
+    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = dv * (-s * along_x + c * along_y);
+  }
+  return m;
+}
+
+LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
+                                    const std::vector<std::size_t>& wheels) {
+  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(wheels.size()), x.size());
+  for (std::size_t j = 0; j < wheels.size(); ++j) {
+    const int index = layout.steering.at(wheels[j]);
+    if (index < 0) throw std::invalid_argument("steering model: wheel is not steerable");
+    m.predicted(static_cast<Eigen::Index>(j)) = x(index);
+    m.jacobian(static_cast<Eigen::Index>(j), index) = 1.0;
+  }
+  return m;
+}
+
+LinearizedMeasurement VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
+  LinearizedMeasurement m = Zeros(2, x.size());
+  const double r = x(L::kYawRate);
+  m.predicted << x(L::kVx) - r * l.y(), x(L::kVy) + r * l.x();
+  m.jacobian(0, L::kVx) = 1.0;
+  m.jacobian(0, L::kYawRate) = -l.y();
+  m.jacobian(1, L::kVy) = 1.0;
+  m.jacobian(1, L::kYawRate) = l.x();
+  return m;
+}
+
+}  // namespace rowloc::localization

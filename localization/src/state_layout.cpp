@@ -1,0 +1,38 @@
+#include "rowloc/localization/state_layout.hpp"
+
+namespace rowloc::localization {
+
+StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry) {
+  StateLayout layout;
+  const std::size_t n = vehicle.wheels.size();
+  layout.steering.assign(n, -1);
+  layout.rolling_radius.assign(n, -1);
+  layout.slip_gradient.assign(n, -1);
+  int next = kBaseSize;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (vehicle.wheels[i].steerable) layout.steering[i] = next++;
+  }
+  if (slip_aware_odometry) {
+    for (std::size_t i = 0; i < n; ++i) {
+      layout.rolling_radius[i] = next++;
+      layout.slip_gradient[i] = next++;
+    }
+  }
+  layout.size = next;
+  return layout;
+}
+
+std::vector<std::string> StateLayout::Names(const mapio::VehicleConfig& vehicle) const {
+  std::vector<std::string> names = {"x_m",     "y_m",     "phi_rad", "vx_mps",  "vy_mps",
+                                    "r_radps", "ax_mps2", "ay_mps2", "bg_radps"};
+  names.resize(static_cast<std::size_t>(size));
+  for (std::size_t i = 0; i < steering.size(); ++i) {
+    const std::string& wheel = vehicle.wheels[i].name;
+    if (steering[i] >= 0) names[static_cast<std::size_t>(steering[i])] = "delta_" + wheel;
+    if (rolling_radius[i] >= 0) names[static_cast<std::size_t>(rolling_radius[i])] = "R_" + wheel;
+    if (slip_gradient[i] >= 0) names[static_cast<std::size_t>(slip_gradient[i])] = "k_" + wheel;
+  }
+  return names;
+}
+
+}  // namespace rowloc::localization

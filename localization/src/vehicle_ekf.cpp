@@ -1,0 +1,233 @@
+#include "rowloc/localization/vehicle_ekf.hpp"
+
+#include "rowloc/localization/measurement_models.hpp"
+#include "rowloc/localization/process_model.hpp"
+#include "rowloc/localization/wheel_slip_estimate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace rowloc::localization {
+
+using L = StateLayout;
+
+namespace {
+
+std::vector<std::size_t> WheelIndex(const mapio::VehicleConfig& vehicle, const std::vector<std::string>& order) {
+  if (order.size() != vehicle.wheels.size()) {
+    throw std::invalid_argument("wheel order: " + std::to_string(order.size()) + " wheels, the vehicle '" +
+                                vehicle.name + "' has " + std::to_string(vehicle.wheels.size()));
+  }
+  std::vector<std::size_t> index(order.size());
+  std::vector<bool> used(order.size(), false);
+  for (std::size_t j = 0; j < order.size(); ++j) {
+    const auto it = std::find_if(vehicle.wheels.begin(), vehicle.wheels.end(),
+                                 [&](const mapio::WheelGeometry& w) { return w.name == order[j]; });
+    if (it == vehicle.wheels.end()) {
+      throw std::invalid_argument("wheel order: '" + order[j] + "' is not a wheel of the vehicle '" + vehicle.name + "'");
+    }
+    index[j] = static_cast<std::size_t>(it - vehicle.wheels.begin());
+    if (used[index[j]]) throw std::invalid_argument("wheel order: '" + order[j] + "' appears twice");
+    used[index[j]] = true;
+  }
+  return index;
+}
+
+FilterConfig Checked(FilterConfig config) {
+  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError("filter config: " + *problem);
+  return config;
+}
+
+mapio::VehicleConfig Checked(mapio::VehicleConfig vehicle) {
+  if (const auto problem = mapio::VehicleConfigProblem(vehicle)) {
+    throw std::invalid_argument("vehicle config: " + *problem);
+  }
+  return vehicle;
+}
+
+Eigen::Matrix2d Rotation(double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  return (Eigen::Matrix2d() << c, -s, s, c).finished();
+}
+
+}  // namespace
+
+VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const geometry::GeoOrigin& origin,
+                       const std::vector<std::string>& wheel_order)
+    : vehicle_(Checked(std::move(vehicle))),
+      config_(Checked(std::move(config))),
+      layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled)),
+      frame_(origin),
+      wheel_index_(WheelIndex(vehicle_, wheel_order)),
+      gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
+      gate_imu_(ChiSquareGate(3, config_.imu.gate_probability)),
+      gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)) {
+  Reset();
+}
+
+void VehicleEkf::Reset() {
+  initialised_ = false;
+  anchor_enu_.reset();
+  x_ = Eigen::VectorXd::Zero(layout_.size);
+  p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
+}
+
+ProcessResult VehicleEkf::Process(const SensorMessage& message) {
+  Validate(message);
+  const double t = TimeOf(message);
+  ProcessResult result;
+  if (initialised_ && t - time_s_ > config_.max_prediction_gap_s) {
+    std::ostringstream notice;
+    notice << "no message for " << t - time_s_ << " s (> max_prediction_gap_s " << config_.max_prediction_gap_s
+           << "): state dropped, re-initialising from GNSS";
+    Reset();
+    result.notice = notice.str();
+  }
+  if (initialised_) PredictTo(t);
+  time_s_ = t;
+  ProcessResult applied = std::visit([this](const auto& m) { return Apply(m); }, message);
+  if (!result.notice) result.notice = applied.notice;
+  result.updates = std::move(applied.updates);
+  ProjectSlipStates();
+  return result;
+}
+
+void VehicleEkf::PredictTo(double t) {
+  double remaining = t - time_s_;
+  while (remaining > 0.0) {
+    const double dt = std::min(remaining, config_.max_prediction_step_s);
+    PredictStep(vehicle_, layout_, config_, x_, p_, dt);
+    remaining -= dt;
+  }
+}
+
+UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const Eigen::VectorXd& innovation,
+                                const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate) {
+  UpdateRecord record{t, sensor, KalmanUpdate(x_, p_, innovation, jacobian, noise, gate, L::kPhi)};
+  return record;
+}
+
+ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
+  ProcessResult result;
+  if (!gps.position) return result;  // no fix: nothing measured
+  const GpsPosition& fix = *gps.position;
+  const Eigen::Vector2d antenna = frame_.ToEnu(fix.latitude_deg, fix.longitude_deg, fix.altitude_m).head<2>();
+  if (!initialised_) {
+    result.notice = TryInitialise(gps, antenna);
+    return result;
+  }
+  const double sigma = std::max(config_.gps.sigma_floor_m, config_.gps.sigma_scale * fix.sigma_horizontal_m);
+  const LinearizedMeasurement h = GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>());
+  const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
+  const Eigen::Vector2d innovation = antenna - h.predicted;
+  double gate = gate_gps_;
+  if (gps_gated_since_s_ && gps.time_s - *gps_gated_since_s_ > config_.gps.reacquire_after_s) {
+    p_.topLeftCorner<2, 2>() += innovation * innovation.transpose();
+    gate = std::numeric_limits<double>::infinity();
+    std::ostringstream notice;
+    notice << "GNSS re-acquired at t=" << gps.time_s << " s: every fix gated out for "
+           << gps.time_s - *gps_gated_since_s_ << " s (innovation " << innovation.norm() << " m)";
+    result.notice = notice.str();
+  }
+  result.updates.push_back(Update(gps.time_s, gps.sensor, innovation, h.jacobian, noise, gate));
+  if (result.updates.back().outcome.accepted) {
+    gps_gated_since_s_.reset();
+  } else if (!gps_gated_since_s_) {
+    gps_gated_since_s_ = gps.time_s;
+  }
+  return result;
+}
+
+ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
+  ProcessResult result;
+  if (!initialised_) return result;
+  // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
+  const Eigen::Vector2d force = Rotation(vehicle_.imu.yaw_rad) * Eigen::Vector2d(imu.accel_x_mps2, imu.accel_y_mps2);
+  Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
+  const LinearizedMeasurement h = ImuModel(x_, vehicle_.imu.position_m.head<2>());
+  const double a = config_.imu.accel_sigma_mps2 * config_.imu.accel_sigma_mps2;
+  const double g = config_.imu.gyro_sigma_radps * config_.imu.gyro_sigma_radps;
+  const Eigen::Matrix3d noise = Eigen::Vector3d(a, a, g).asDiagonal();
+  result.updates.push_back(Update(imu.time_s, imu.sensor, z - h.predicted, h.jacobian, noise, gate_imu_));
+  return result;
+}
+
+ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
+  const std::size_t n = vehicle_.wheels.size();
+  last_speed_radps_.assign(n, 0.0);
+  last_torque_nm_.assign(n, 0.0);
+  for (std::size_t j = 0; j < n; ++j) {
+    last_speed_radps_[wheel_index_[j]] = wheels.speed_radps[j];
+    if (wheels.torque_nm) last_torque_nm_[wheel_index_[j]] = (*wheels.torque_nm)[j];
+  }
+  ProcessResult result;
+  if (!initialised_) return result;
+  std::optional<std::vector<double>> torque;
+  if (wheels.torque_nm) torque = last_torque_nm_;
+  ProjectSlipStates();  // k_s above the new torque before linearizing k / (k - T)
+  const LinearizedMeasurement h = WheelSpeedModel(x_, vehicle_, layout_, torque);
+  const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(last_speed_radps_.data(), static_cast<Eigen::Index>(n));
+  const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
+  const Eigen::VectorXd variance = (s * s + (f * z.array()).square()).matrix();
+  const Eigen::MatrixXd noise = variance.asDiagonal();
+  const double gate = ChiSquareGate(static_cast<int>(n), config_.wheels.gate_probability);
+  result.updates.push_back(Update(wheels.time_s, "wheels", z - h.predicted, h.jacobian, noise, gate));
+  return result;
+}
+
+ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
+  last_steering_rad_.assign(vehicle_.wheels.size(), std::nullopt);
+  std::vector<std::size_t> wheels;
+  std::vector<double> angles;
+  for (std::size_t j = 0; j < steering.angle_rad.size(); ++j) {
+    const std::size_t i = wheel_index_[j];
+    last_steering_rad_[i] = steering.angle_rad[j];
+    if (steering.angle_rad[j] && layout_.steering[i] >= 0) {
+      wheels.push_back(i);
+      angles.push_back(*steering.angle_rad[j]);
+    }
+  }
+  ProcessResult result;
+  if (!initialised_ || wheels.empty()) return result;
+  const LinearizedMeasurement h = SteeringModel(x_, layout_, wheels);
+  const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(angles.data(), static_cast<Eigen::Index>(angles.size()));
+  const double s = config_.steering.angle_sigma_rad;
+  const auto m = static_cast<Eigen::Index>(wheels.size());
+  const Eigen::MatrixXd noise = Eigen::MatrixXd::Identity(m, m) * s * s;
+  const double gate = ChiSquareGate(static_cast<int>(m), config_.steering.gate_probability);
+  result.updates.push_back(Update(steering.time_s, "steering", z - h.predicted, h.jacobian, noise, gate));
+  return result;
+}
+
+ProcessResult VehicleEkf::Apply(const VioMessage& vio) {
+  ProcessResult result;
+  if (!initialised_) return result;
+  const LinearizedMeasurement h = VioModel(x_, config_.vio.position_m);
+  const double s = config_.vio.sigma_scale * vio.sigma_mps;
+  const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * s * s;
+  const Eigen::Vector2d z(vio.velocity_x_mps, vio.velocity_y_mps);
+  result.updates.push_back(Update(vio.time_s, vio.sensor, z - h.predicted, h.jacobian, noise, gate_vio_));
+  return result;
+}
+
+std::vector<double> VehicleEkf::WheelSlip() const {
+  if (!initialised_ || last_speed_radps_.empty()) return {};
+  return EstimateWheelSlip(x_, vehicle_, layout_, last_speed_radps_);
+}
+
+void VehicleEkf::ProjectSlipStates() {
+  if (!initialised_ || !layout_.slip_aware()) return;
+  const double k_min = config_.slip_aware_odometry.min_slip_gradient_nm;
+  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
+    const double nominal = vehicle_.wheels[i].nominal_radius_m;
+    double& radius = x_(layout_.rolling_radius[i]);
+    radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
+    const double torque = last_torque_nm_.empty() ? 0.0 : last_torque_nm_[i];
+    double& k = x_(layout_.slip_gradient[i]);
+    k = std::max(k, std::max(torque, 0.0) + k_min);
+  }
+}
+
+}  // namespace rowloc::localization

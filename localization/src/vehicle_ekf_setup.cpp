@@ -1,0 +1,165 @@
+// VehicleEkf: input checks and initialisation (vehicle_ekf.hpp; docs/localization-filter.md §2).
+#include "rowloc/localization/vehicle_ekf.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace rowloc::localization {
+
+using L = StateLayout;
+
+namespace {
+
+[[noreturn]] void Reject(const SensorMessage& message, const std::string& reason) {
+  std::ostringstream text;
+  text << TypeOf(message) << " at t=" << TimeOf(message) << " s: " << reason;
+  throw FilterInputError(text.str());
+}
+
+void RequireFinite(const SensorMessage& message, double value, const char* field) {
+  if (!std::isfinite(value)) Reject(message, std::string(field) + " must be finite");
+}
+
+void RequirePositive(const SensorMessage& message, double value, const char* field) {
+  if (!(std::isfinite(value) && value > 0.0)) Reject(message, std::string(field) + " must be finite and > 0");
+}
+
+}  // namespace
+
+void VehicleEkf::Validate(const SensorMessage& message) const {
+  const double t = TimeOf(message);
+  RequireFinite(message, t, "t");
+  if (t < time_s_) {
+    std::ostringstream reason;
+    reason << "time goes backwards (previous message at t=" << time_s_ << " s)";
+    Reject(message, reason.str());
+  }
+  const std::size_t n = vehicle_.wheels.size();
+  if (const auto* gps = std::get_if<GpsMessage>(&message); gps && gps->position) {
+    const GpsPosition& p = *gps->position;
+    RequireFinite(message, p.latitude_deg, "latitude_deg");
+    RequireFinite(message, p.longitude_deg, "longitude_deg");
+    RequireFinite(message, p.altitude_m, "altitude_m");
+    if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) Reject(message, "position outside WGS84 range");
+    RequirePositive(message, p.sigma_horizontal_m, "sigma_horizontal_m");
+  } else if (const auto* imu = std::get_if<ImuMessage>(&message)) {
+    RequireFinite(message, imu->accel_x_mps2, "accel_x_mps2");
+    RequireFinite(message, imu->accel_y_mps2, "accel_y_mps2");
+    RequireFinite(message, imu->gyro_z_radps, "gyro_z_radps");
+  } else if (const auto* wheels = std::get_if<WheelsMessage>(&message)) {
+    if (wheels->speed_radps.size() != n) Reject(message, "expected " + std::to_string(n) + " wheel speeds");
+    if (wheels->torque_nm && wheels->torque_nm->size() != n) Reject(message, "expected " + std::to_string(n) + " torques");
+    for (const double w : wheels->speed_radps) {
+      RequireFinite(message, w, "speed_radps");
+      if (std::abs(w) > config_.wheels.max_speed_radps) Reject(message, "|speed_radps| above wheels.max_speed_radps");
+    }
+    if (wheels->torque_nm) {
+      for (const double torque : *wheels->torque_nm) RequireFinite(message, torque, "torque_nm");
+    }
+  } else if (const auto* steering = std::get_if<SteeringMessage>(&message)) {
+    if (steering->angle_rad.size() != n) Reject(message, "expected " + std::to_string(n) + " steering entries");
+    for (const auto& angle : steering->angle_rad) {
+      if (!angle) continue;
+      RequireFinite(message, *angle, "angle_rad");
+      if (std::abs(*angle) > vehicle_.max_steering_angle_rad + 0.1) Reject(message, "|angle_rad| above the steering limit");
+    }
+  } else if (const auto* vio = std::get_if<VioMessage>(&message)) {
+    RequireFinite(message, vio->velocity_x_mps, "velocity_x_mps");
+    RequireFinite(message, vio->velocity_y_mps, "velocity_y_mps");
+    RequirePositive(message, vio->sigma_mps, "sigma_mps");
+  }
+}
+
+std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna) {
+  if (!anchor_enu_) {
+    anchor_enu_ = antenna;
+    return std::nullopt;
+  }
+  const Eigen::Vector2d moved = antenna - *anchor_enu_;
+  if (moved.norm() < config_.initialisation.heading_baseline_m) return std::nullopt;
+  // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
+  // angle (a crabbing swerve robot moves at delta to its heading).
+  double mean_speed = 0.0, mean_steering = 0.0;
+  for (const double w : last_speed_radps_) mean_speed += w / static_cast<double>(last_speed_radps_.size());
+  int steered = 0;
+  for (const auto& angle : last_steering_rad_) {
+    if (angle) mean_steering += *angle, ++steered;
+  }
+  if (steered > 0) mean_steering /= steered;
+  double heading = std::atan2(moved.y(), moved.x()) - mean_steering;
+  if (mean_speed < 0.0) heading += std::numbers::pi;
+  heading = WrapAngle(heading);
+  const double c = std::cos(heading), s = std::sin(heading);
+  const Eigen::Vector2d& l = vehicle_.gnss_antenna.position_m.head<2>();
+  const Eigen::Vector2d reference = antenna - Eigen::Vector2d(c * l.x() - s * l.y(), s * l.x() + c * l.y());
+  const double sigma = std::max(config_.gps.sigma_floor_m, config_.gps.sigma_scale * gps.position->sigma_horizontal_m);
+  Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
+                                               std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
+  InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance);
+  // Initial speed from the encoders (mean wheel-centre speed), along the mean steering direction.
+  double speed = 0.0;
+  for (std::size_t i = 0; i < last_speed_radps_.size(); ++i) {
+    speed += last_speed_radps_[i] * vehicle_.wheels[i].nominal_radius_m / static_cast<double>(last_speed_radps_.size());
+  }
+  x_(L::kVx) = speed * std::cos(mean_steering);
+  x_(L::kVy) = speed * std::sin(mean_steering);
+  std::ostringstream notice;
+  notice << "initialised at t=" << gps.time_s << " s: heading " << heading << " rad from a GNSS baseline of "
+         << moved.norm() << " m";
+  return notice.str();
+}
+
+void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance) {
+  const InitialisationConfig& init = config_.initialisation;
+  x_.setZero();
+  p_.setZero();
+  Eigen::VectorXd variance = Eigen::VectorXd::Zero(layout_.size);
+  variance(L::kVx) = variance(L::kVy) = init.velocity_sigma_mps * init.velocity_sigma_mps;
+  variance(L::kYawRate) = init.yaw_rate_sigma_radps * init.yaw_rate_sigma_radps;
+  variance(L::kAx) = variance(L::kAy) = init.acceleration_sigma_mps2 * init.acceleration_sigma_mps2;
+  variance(L::kGyroBias) = init.gyro_bias_sigma_radps * init.gyro_bias_sigma_radps;
+  const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
+  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
+    if (const int d = layout_.steering[i]; d >= 0) {
+      variance(d) = init.steering_sigma_rad * init.steering_sigma_rad;
+      if (i < last_steering_rad_.size() && last_steering_rad_[i]) x_(d) = *last_steering_rad_[i];
+    }
+    if (const int r = layout_.rolling_radius[i]; r >= 0) {
+      x_(r) = vehicle_.wheels[i].nominal_radius_m;
+      variance(r) = slip.rolling_radius_sigma_m * slip.rolling_radius_sigma_m;
+      x_(layout_.slip_gradient[i]) = slip.slip_gradient_initial_nm;
+      variance(layout_.slip_gradient[i]) = slip.slip_gradient_sigma_nm * slip.slip_gradient_sigma_nm;
+    }
+  }
+  p_.diagonal() = variance;
+  x_.head<3>() = pose;
+  x_(L::kPhi) = WrapAngle(pose.z());
+  p_.topLeftCorner<3, 3>() = 0.5 * (pose_covariance + pose_covariance.transpose());
+  time_s_ = t;
+  gps_gated_since_s_.reset();
+  initialised_ = true;
+  anchor_enu_.reset();
+}
+
+void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance) {
+  if (!std::isfinite(t) || t < time_s_) throw FilterInputError("SetPose: time must be finite and not before the filter's time");
+  if (!pose.allFinite() || !covariance.allFinite()) throw FilterInputError("SetPose: pose and covariance must be finite");
+  const Eigen::Matrix3d symmetric = 0.5 * (covariance + covariance.transpose());
+  if (symmetric.llt().info() != Eigen::Success) throw FilterInputError("SetPose: covariance must be positive definite");
+  if (!initialised_) {
+    InitialiseState(t, pose, symmetric);
+    return;
+  }
+  PredictTo(t);
+  time_s_ = t;
+  x_.head<3>() = pose;
+  x_(L::kPhi) = WrapAngle(pose.z());
+  p_.topRows<3>().setZero();
+  p_.leftCols<3>().setZero();
+  p_.topLeftCorner<3, 3>() = symmetric;
+}
+
+}  // namespace rowloc::localization
