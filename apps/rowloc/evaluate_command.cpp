@@ -30,6 +30,7 @@ struct EvaluateOptions {
   std::string output_dir;
   std::string map_path;
   std::size_t max_lag = 50;
+  bool clip_to_truth = false;
   double drift_min_duration_s = 5.0;
   sim::PlotOptions plot;
   bool no_plots = false;
@@ -52,11 +53,26 @@ void MakePlots(const EvaluateOptions& o, const sim::EvaluationResult& result, co
   for (const std::string& svg : files.svg_files) spdlog::info("plot: {}", (files.directory / svg).string());
 }
 
+/// --clip-to-truth: estimates and updates outside the truth's time span are dropped, and counted in
+/// the log (a replay's last messages may follow the simulator's last truth sample).
+void ClipToTruth(sim::EstimateStream& estimates, const sim::TruthStream& truth) {
+  if (truth.samples.empty()) return;
+  const double first = truth.samples.front().t_s, last = truth.samples.back().t_s;
+  const auto outside = [&](const auto& sample) { return sample.t_s < first || sample.t_s > last; };
+  const auto dropped_estimates = std::erase_if(estimates.estimates, outside);
+  const auto dropped_updates = std::erase_if(estimates.updates, outside);
+  if (dropped_estimates + dropped_updates > 0) {
+    spdlog::warn("--clip-to-truth: {} estimates and {} updates outside the truth's span [{} s, {} s] not evaluated",
+                 dropped_estimates, dropped_updates, first, last);
+  }
+}
+
 void RunEvaluate(const EvaluateOptions& o) {
   if (o.json) spdlog::set_default_logger(spdlog::stderr_color_mt("rowloc-evaluate"));  // stdout is for JSON
   const sim::TruthStream truth = sim::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
   spdlog::info("{}: {} truth samples", o.truth_path, truth.samples.size());
-  const sim::EstimateStream estimates = sim::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
+  sim::EstimateStream estimates = sim::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
+  if (o.clip_to_truth) ClipToTruth(estimates, truth);
   spdlog::info("{}: {} estimates, {} updates", o.estimates_path, estimates.estimates.size(), estimates.updates.size());
   std::optional<geometry::RowMap> map;
   sim::EvaluationOptions options;
@@ -96,6 +112,8 @@ void RegisterEvaluateCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--k-sigma", o->plot.k_sigma, "Ellipse and envelope scale k (P = k^2 S)")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-plots", o->no_plots, "Do not write or draw plots");
+  cmd->add_flag("--clip-to-truth", o->clip_to_truth,
+                "Drop (and count) estimates outside the truth's time span instead of failing");
   cmd->add_flag("--json", o->json, "Print the JSON summary to stdout (logs go to stderr)");
   cmd->callback([o] {
     try {

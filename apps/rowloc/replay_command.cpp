@@ -1,7 +1,8 @@
 // `rowloc replay LOG --vehicle CONFIG [--filter FILTER] -o ESTIMATES [--period S] [--no-updates]`:
 // runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log (docs/protocol.md
 // §1) and writes the estimate stream (§3): estimate lines with the (x, y, phi) covariance and the
-// per-wheel slip every --period seconds of log time, and one update line per measurement update.
+// per-wheel slip every --period seconds of log time (SAE slip from the filter; for skid-steer
+// vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one update line per measurement update.
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -9,6 +10,7 @@
 
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/localization/track_slip_observer.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
@@ -20,6 +22,8 @@
 #include <limits>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <variant>
 #include <memory>
 #include <string>
 
@@ -42,12 +46,51 @@ struct UpdateCounts {
   std::size_t rejected = 0;
 };
 
-sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf) {
+/// Skid-steer vehicles: the adaptive track-slip observer (seed 001 eq. (8)) fed with the filtered
+/// pose and the raw sprocket speeds times the sprocket radius after every wheels message.
+class TrackSlipTap {
+ public:
+  explicit TrackSlipTap(const mapio::VehicleConfig& vehicle) {
+    if (vehicle.kind != mapio::VehicleKind::kSkidSteer) return;
+    const bool first_is_right = vehicle.wheels[0].position_m.y() < vehicle.wheels[1].position_m.y();
+    right_ = first_is_right ? 0 : 1;
+    localization::TrackSlipObserverConfig config;
+    config.track_width_m = std::abs(vehicle.wheels[0].position_m.y() - vehicle.wheels[1].position_m.y());
+    observer_.emplace(config);
+  }
+  bool active() const { return observer_.has_value(); }
+
+  void Observe(const localization::VehicleEkf& ekf, const localization::SensorMessage& message) {
+    if (!observer_ || !ekf.initialised() || !std::holds_alternative<localization::WheelsMessage>(message)) return;
+    const std::vector<double> speeds = ekf.last_wheel_speeds_radps();
+    const auto& wheels = ekf.vehicle().wheels;
+    const std::size_t left = 1 - right_;
+    const Eigen::VectorXd& x = ekf.state();
+    observer_->Update({ekf.time_s(), x(0), x(1), x(2), speeds[right_] * wheels[right_].nominal_radius_m,
+                       speeds[left] * wheels[left].nominal_radius_m});
+  }
+
+  /// Track slip i = 1 - eta per track name, once the observer runs.
+  std::vector<std::pair<std::string, double>> Slip(const mapio::VehicleConfig& vehicle) const {
+    if (!observer_ || !observer_->initialised()) return {};
+    return {{vehicle.wheels[right_].name, observer_->slip_right()}, {vehicle.wheels[1 - right_].name, observer_->slip_left()}};
+  }
+
+ private:
+  std::optional<localization::TrackSlipObserver> observer_;
+  std::size_t right_ = 0;
+};
+
+sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf, const TrackSlipTap& tracks) {
   sim::EstimateRecord record;
   record.time_s = ekf.time_s();
   record.position_m = ekf.state().head<2>();
   record.heading_rad = ekf.state()(localization::StateLayout::kPhi);
   record.covariance = ekf.covariance().topLeftCorner<3, 3>();
+  if (tracks.active()) {
+    record.slip = tracks.Slip(ekf.vehicle());
+    return record;
+  }
   const std::vector<double> slip = ekf.WheelSlip();
   for (std::size_t i = 0; i < slip.size(); ++i) record.slip.emplace_back(ekf.vehicle().wheels[i].name, slip[i]);
   return record;
@@ -77,6 +120,7 @@ void RunReplay(const ReplayOptions& o) {
   sim::EstimateLogWriter writer(out, "rowloc replay", vehicle.name, reader.header().origin);
   spdlog::info("replay {} with vehicle {} and filter {}", o.log_path, vehicle.name, config.name);
 
+  TrackSlipTap tracks(vehicle);
   std::map<std::string, UpdateCounts> counts;
   std::size_t input_errors = 0, estimates = 0;
   double next_output_s = -std::numeric_limits<double>::infinity();
@@ -90,9 +134,10 @@ void RunReplay(const ReplayOptions& o) {
       continue;
     }
     if (result.notice) spdlog::info("{}:{}: {}", o.log_path, reader.line_number(), *result.notice);
+    tracks.Observe(ekf, *message);
     WriteUpdates(result, writer, !o.no_updates, counts);
     if (ekf.initialised() && ekf.time_s() >= next_output_s) {
-      writer.Write(EstimateOf(ekf));
+      writer.Write(EstimateOf(ekf, tracks));
       ++estimates;
       next_output_s = ekf.time_s() + o.period_s;
     }

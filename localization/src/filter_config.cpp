@@ -54,6 +54,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"imu.gate_probability", c.imu.gate_probability, true},
       {"wheels.speed_sigma_radps", c.wheels.speed_sigma_radps},
       {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction},
+      {"wheels.lateral_velocity_sigma_mps", c.wheels.lateral_velocity_sigma_mps},
       {"wheels.gate_probability", c.wheels.gate_probability, true},
       {"wheels.max_speed_radps", c.wheels.max_speed_radps},
       {"steering.angle_sigma_rad", c.steering.angle_sigma_rad},
@@ -104,7 +105,8 @@ FilterConfig ReadConfig(Reader& root) {
   }
   {
     Reader w = root.Object("wheels");
-    c.wheels = {w.Number("speed_sigma_radps"), w.Number("speed_sigma_fraction"), w.Number("gate_probability"),
+    c.wheels = {w.Number("speed_sigma_radps"), w.Number("speed_sigma_fraction"),
+                w.Number("lateral_velocity_sigma_mps"), w.Number("gate_probability"),
                 w.Number("max_speed_radps")};
     w.RejectUnknownKeys();
   }

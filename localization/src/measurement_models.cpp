@@ -89,6 +89,26 @@ LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::Veh
   return m;
 }
 
+LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                                const StateLayout& layout) {
+  const std::size_t n = vehicle.wheels.size();
+  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
+  const double r = x(L::kYawRate);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
+    const double delta = SteeringAngle(x, layout, i);
+    const double c = std::cos(delta), s = std::sin(delta);
+    const double along_x = x(L::kVx) - r * l.y(), along_y = x(L::kVy) + r * l.x();
+    m.predicted(row) = -s * along_x + c * along_y;
+    m.jacobian(row, L::kVx) = -s;
+    m.jacobian(row, L::kVy) = c;
+    m.jacobian(row, L::kYawRate) = s * l.y() + c * l.x();
+    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = -c * along_x - s * along_y;
+  }
+  return m;
+}
+
 LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
                                     const std::vector<std::size_t>& wheels) {
   LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(wheels.size()), x.size());

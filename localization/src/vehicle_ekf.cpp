@@ -174,6 +174,11 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   const Eigen::MatrixXd noise = variance.asDiagonal();
   const double gate = ChiSquareGate(static_cast<int>(n), config_.wheels.gate_probability);
   result.updates.push_back(Update(wheels.time_s, "wheels", z - h.predicted, h.jacobian, noise, gate));
+  // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
+  const LinearizedMeasurement lateral = WheelLateralVelocityModel(x_, vehicle_, layout_);
+  const double l = config_.wheels.lateral_velocity_sigma_mps;
+  const Eigen::MatrixXd lateral_noise = Eigen::MatrixXd::Identity(lateral.predicted.size(), lateral.predicted.size()) * l * l;
+  result.updates.push_back(Update(wheels.time_s, "nonholonomic", -lateral.predicted, lateral.jacobian, lateral_noise, gate));
   return result;
 }
 

@@ -28,7 +28,7 @@ std::vector<double> EstimateWheelSlip(const Eigen::VectorXd& x, const mapio::Veh
   }
   std::vector<double> slip(raw_speed_radps.size());
   for (std::size_t i = 0; i < slip.size(); ++i) {
-    slip[i] = SaeSlip(raw_speed_radps[i], WheelRollingRadius(x, vehicle, layout, i),
+    slip[i] = SaeSlip(raw_speed_radps[i], vehicle.wheels[i].nominal_radius_m,
                       WheelLongitudinalVelocity(x, vehicle, layout, i));
   }
   return slip;

@@ -38,7 +38,7 @@ struct ProcessNoise {
 
 /// Seed 004: rolling radius R_w and torque/slip gradient k_s of every wheel as EKF states.
 struct SlipAwareOdometryConfig {
-  bool enabled = false;
+  bool enabled = true;
   double rolling_radius_sigma_m = 0.01;             ///< initial sigma of R_w around the nominal radius
   double slip_gradient_initial_nm = 500.0;          ///< initial k_s (torque per unit slip), > 0
   double slip_gradient_sigma_nm = 250.0;            ///< its initial sigma
@@ -68,8 +68,8 @@ struct GpsNoise {
 };
 
 struct ImuNoise {
-  double accel_sigma_mps2 = 0.05;  ///< per axis, per sample (white noise + unmodelled bias)
-  double gyro_sigma_radps = 0.003;
+  double accel_sigma_mps2 = 0.03;  ///< per axis, per sample (white noise + unmodelled bias)
+  double gyro_sigma_radps = 0.002;
   double gate_probability = 0.9999;
 };
 
@@ -77,13 +77,16 @@ struct WheelNoise {
   double speed_sigma_radps = 0.1;  ///< per wheel, per sample (quantization, noise)
   /// Relative part: sigma_i^2 = speed_sigma_radps^2 + (speed_sigma_fraction omega_i)^2 (slip that
   /// the model does not capture: use the slip range of the terrain without slip-aware odometry).
-  double speed_sigma_fraction = 0.02;
+  double speed_sigma_fraction = 0.01;
+  /// Side-slip sigma of the non-holonomic constraint (lateral wheel-centre velocity = 0), m/s; it
+  /// is applied with every wheels message as a separate update named "nonholonomic".
+  double lateral_velocity_sigma_mps = 0.03;
   double gate_probability = 0.9999;
   double max_speed_radps = 200.0;  ///< larger |omega| is rejected as out of range
 };
 
 struct SteeringNoise {
-  double angle_sigma_rad = 0.002;
+  double angle_sigma_rad = 0.001;
   double gate_probability = 0.9999;
 };
 

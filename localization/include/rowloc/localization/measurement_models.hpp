@@ -14,6 +14,10 @@
 //   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
 //   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eq. (18):
 //           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque)
+// Non-holonomic constraint of wheel i (a pseudo-measurement z = 0: wheels and tracks do not slide
+// sideways, up to a side-slip noise; it is what makes the heading observable from GNSS positions):
+//   h_i   = -sin(delta_i) (vx - r l_iy) + cos(delta_i) (vy + r l_ix)   (wheel-centre velocity across
+//                                                                      the wheel heading)
 // Steering encoder of wheel i:   h = delta_i
 // Visual odometry at the camera l_c:   h = [vx - r l_cy, vy + r l_cx]
 #pragma once
@@ -50,6 +54,10 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
                                       const std::optional<std::vector<double>>& torque_nm);
+
+/// Lateral wheel-centre velocities of all wheels (vehicle order), m/s (the non-holonomic rows).
+LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                                const StateLayout& layout);
 
 /// Steering angles of the given wheels (indices into the vehicle's wheels; each must be steerable).
 LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,

@@ -81,6 +81,8 @@ class VehicleEkf {
   /// SAE slip per wheel (vehicle order) from the state and the last raw encoder speeds; empty before
   /// the first wheels message or initialisation.
   std::vector<double> WheelSlip() const;
+  /// The raw encoder speeds of the last wheels message (vehicle order); empty before the first.
+  const std::vector<double>& last_wheel_speeds_radps() const { return last_speed_radps_; }
 
  private:
   void Validate(const SensorMessage& message) const;

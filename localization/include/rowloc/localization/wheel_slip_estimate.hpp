@@ -3,8 +3,10 @@
 //   s = (omega R - v_long) / max(|omega R|, |v_long|)
 // with v_long the wheel-centre velocity along the wheel heading from the filtered body twist and
 // steering angle (measurement_models.hpp), omega the *raw* encoder speed (not the filter's
-// prediction), R the rolling radius (the slip-aware state R_w when estimated, else the nominal
-// radius); s = 0 when both |omega R| and |v_long| are below 0.05 m/s; saturated to [-1, 1] (speeds
+// prediction), R the nominal wheel radius of the vehicle file (seed 000 ch. 7 uses the wheel radius:
+// not the slip-aware state R_w, which at constant torque absorbs the slip itself, since only
+// R_w (k_s - T) / k_s is observable then; a terrain's rolling radius below the nominal one therefore
+// reads as extra slip, see docs/localization-filter.md §4); s = 0 when both |omega R| and |v_long| are below 0.05 m/s; saturated to [-1, 1] (speeds
 // of opposite signs would give up to 2 in magnitude).
 #pragma once
 
