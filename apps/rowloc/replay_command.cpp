@@ -15,8 +15,10 @@
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
 
+#include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -39,6 +41,7 @@ struct ReplayOptions {
   std::string output_path;
   double period_s = 0.1;
   bool no_updates = false;
+  std::vector<std::string> skip_types;  ///< message types not given to the filter (ablation runs)
 };
 
 struct UpdateCounts {
@@ -122,9 +125,13 @@ void RunReplay(const ReplayOptions& o) {
 
   TrackSlipTap tracks(vehicle);
   std::map<std::string, UpdateCounts> counts;
-  std::size_t input_errors = 0, estimates = 0;
+  std::size_t input_errors = 0, estimates = 0, skipped = 0;
   double next_output_s = -std::numeric_limits<double>::infinity();
   while (const auto message = reader.Next()) {
+    if (std::find(o.skip_types.begin(), o.skip_types.end(), localization::TypeOf(*message)) != o.skip_types.end()) {
+      ++skipped;
+      continue;
+    }
     localization::ProcessResult result;
     try {
       result = ekf.Process(*message);
@@ -143,6 +150,7 @@ void RunReplay(const ReplayOptions& o) {
     }
   }
   spdlog::info("{} messages, {} estimates, {} rejected inputs", reader.messages_read(), estimates, input_errors);
+  if (skipped > 0) spdlog::info("{} messages skipped (--skip {})", skipped, fmt::join(o.skip_types, ","));
   for (const auto& [sensor, c] : counts) {
     spdlog::info("updates {}: {} accepted, {} gated out", sensor, c.accepted, c.rejected);
   }
@@ -163,6 +171,8 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");
+  cmd->add_option("--skip", o->skip_types, "Message types not given to the filter (e.g. imu: odometry-only runs)")
+      ->check(CLI::IsMember({"gps", "imu", "wheels", "steering", "ultrasonic", "vio"}));
   cmd->callback([o] {
     try {
       RunReplay(*o);

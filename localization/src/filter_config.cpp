@@ -4,7 +4,9 @@
 
 #include "rowloc/mapio/detail/json_object_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <vector>
 
 namespace rowloc::localization {
@@ -46,7 +48,9 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
       {"initialisation.steering_sigma_rad", i.steering_sigma_rad},
       {"gps.sigma_scale", c.gps.sigma_scale},
-      {"gps.sigma_floor_m", c.gps.sigma_floor_m},
+      {"gps.sigma_floor_rtk_fixed_m", c.gps.sigma_floor_rtk_fixed_m},
+      {"gps.sigma_floor_rtk_float_m", c.gps.sigma_floor_rtk_float_m},
+      {"gps.sigma_floor_sbas_m", c.gps.sigma_floor_sbas_m},
       {"gps.gate_probability", c.gps.gate_probability, true},
       {"gps.reacquire_after_s", c.gps.reacquire_after_s},
       {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2},
@@ -94,7 +98,8 @@ FilterConfig ReadConfig(Reader& root) {
   }
   {
     Reader g = root.Object("gps");
-    c.gps = {g.Number("sigma_scale"), g.Number("sigma_floor_m"), g.Number("gate_probability"),
+    c.gps = {g.Number("sigma_scale"), g.Number("sigma_floor_rtk_fixed_m"), g.Number("sigma_floor_rtk_float_m"),
+             g.Number("sigma_floor_sbas_m"), g.Number("gate_probability"),
              g.Number("reacquire_after_s")};
     g.RejectUnknownKeys();
   }
@@ -139,6 +144,17 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
     return std::string("max_prediction_gap_s must be >= max_prediction_step_s");
   }
   return std::nullopt;
+}
+
+double GpsSigma(const GpsNoise& noise, GnssFixQuality fix, double receiver_sigma_horizontal_m) {
+  double floor = 0.0;
+  switch (fix) {
+    case GnssFixQuality::kRtkFixed: floor = noise.sigma_floor_rtk_fixed_m; break;
+    case GnssFixQuality::kRtkFloat: floor = noise.sigma_floor_rtk_float_m; break;
+    case GnssFixQuality::kSbas: floor = noise.sigma_floor_sbas_m; break;
+    case GnssFixQuality::kNone: throw std::invalid_argument("GpsSigma: a fix quality of none has no position");
+  }
+  return std::max(floor, noise.sigma_scale * receiver_sigma_horizontal_m);
 }
 
 FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name) {

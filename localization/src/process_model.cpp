@@ -79,16 +79,18 @@ void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                  Eigen::VectorXd& x, Eigen::MatrixXd& p, double dt) {
   constexpr int b = L::kBaseSize;
   const Eigen::Index rest = x.size() - b;
+  const Eigen::VectorXd before = x;  // the distance rolled in the step uses the velocity at its start
   const BaseJacobian f = PropagateState(x, dt);
   // P = [Pbb Pba; Pab Paa] -> [F Pbb F^T, F Pba; (F Pba)^T, Paa]
-  const BaseJacobian pbb = f * p.topLeftCorner<b, b>() * f.transpose();
+  const BaseJacobian fp = f.lazyProduct(p.topLeftCorner<b, b>());
+  const BaseJacobian pbb = fp.lazyProduct(f.transpose());
   p.topLeftCorner<b, b>() = 0.5 * (pbb + pbb.transpose());
   if (rest > 0) {
-    const Eigen::MatrixXd pba = f * p.topRightCorner(b, rest);
+    const Eigen::MatrixXd pba = f.lazyProduct(p.topRightCorner(b, rest));
     p.topRightCorner(b, rest) = pba;
     p.bottomLeftCorner(rest, b) = pba.transpose();
   }
-  AddProcessNoise(vehicle, layout, config, x, p, dt);
+  AddProcessNoise(vehicle, layout, config, before, p, dt);
 }
 
 }  // namespace rowloc::localization

@@ -64,6 +64,11 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
       gate_imu_(ChiSquareGate(3, config_.imu.gate_probability)),
       gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)) {
+  // Quantiles are costly (Boost.Math root finding): computed once per dimension, not per message.
+  for (int m = 1; m <= static_cast<int>(vehicle_.wheels.size()); ++m) {
+    wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
+    steering_gates_.push_back(ChiSquareGate(m, config_.steering.gate_probability));
+  }
   Reset();
 }
 
@@ -90,7 +95,7 @@ ProcessResult VehicleEkf::Process(const SensorMessage& message) {
   ProcessResult applied = std::visit([this](const auto& m) { return Apply(m); }, message);
   if (!result.notice) result.notice = applied.notice;
   result.updates = std::move(applied.updates);
-  ProjectSlipStates();
+  ProjectStates();
   return result;
 }
 
@@ -118,7 +123,7 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
     result.notice = TryInitialise(gps, antenna);
     return result;
   }
-  const double sigma = std::max(config_.gps.sigma_floor_m, config_.gps.sigma_scale * fix.sigma_horizontal_m);
+  const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
   const LinearizedMeasurement h = GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>());
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
@@ -166,13 +171,13 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   if (!initialised_) return result;
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
-  ProjectSlipStates();  // k_s above the new torque before linearizing k / (k - T)
+  ProjectStates();  // k_s above the new torque before linearizing k / (k - T)
   const LinearizedMeasurement h = WheelSpeedModel(x_, vehicle_, layout_, torque);
   const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(last_speed_radps_.data(), static_cast<Eigen::Index>(n));
   const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
   const Eigen::VectorXd variance = (s * s + (f * z.array()).square()).matrix();
   const Eigen::MatrixXd noise = variance.asDiagonal();
-  const double gate = ChiSquareGate(static_cast<int>(n), config_.wheels.gate_probability);
+  const double gate = wheel_gates_[n - 1];
   result.updates.push_back(Update(wheels.time_s, "wheels", z - h.predicted, h.jacobian, noise, gate));
   // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
   const LinearizedMeasurement lateral = WheelLateralVelocityModel(x_, vehicle_, layout_);
@@ -201,8 +206,10 @@ ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   const double s = config_.steering.angle_sigma_rad;
   const auto m = static_cast<Eigen::Index>(wheels.size());
   const Eigen::MatrixXd noise = Eigen::MatrixXd::Identity(m, m) * s * s;
-  const double gate = ChiSquareGate(static_cast<int>(m), config_.steering.gate_probability);
-  result.updates.push_back(Update(steering.time_s, "steering", z - h.predicted, h.jacobian, noise, gate));
+  const double gate = steering_gates_[static_cast<std::size_t>(m) - 1];
+  // Swerve modules turn through +-pi: the innovation is an angle difference.
+  const Eigen::VectorXd innovation = (z - h.predicted).unaryExpr([](double d) { return WrapAngle(d); });
+  result.updates.push_back(Update(steering.time_s, "steering", innovation, h.jacobian, noise, gate));
   return result;
 }
 
@@ -222,8 +229,12 @@ std::vector<double> VehicleEkf::WheelSlip() const {
   return EstimateWheelSlip(x_, vehicle_, layout_, last_speed_radps_);
 }
 
-void VehicleEkf::ProjectSlipStates() {
-  if (!initialised_ || !layout_.slip_aware()) return;
+void VehicleEkf::ProjectStates() {
+  if (!initialised_) return;
+  for (const int d : layout_.steering) {
+    if (d >= 0) x_(d) = WrapAngle(x_(d));
+  }
+  if (!layout_.slip_aware()) return;
   const double k_min = config_.slip_aware_odometry.min_slip_gradient_nm;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;

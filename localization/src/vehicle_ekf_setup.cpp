@@ -27,6 +27,15 @@ void RequirePositive(const SensorMessage& message, double value, const char* fie
   if (!(std::isfinite(value) && value > 0.0)) Reject(message, std::string(field) + " must be finite and > 0");
 }
 
+/// A claimed 1-sigma must be positive and below kMaxSigma (its square must stay far from overflow;
+/// a receiver claiming kilometres has no position worth fusing).
+constexpr double kMaxSigma = 1e4;
+
+void RequireSigma(const SensorMessage& message, double value, const char* field) {
+  RequirePositive(message, value, field);
+  if (value > kMaxSigma) Reject(message, std::string(field) + " above 1e4 (out of range)");
+}
+
 }  // namespace
 
 void VehicleEkf::Validate(const SensorMessage& message) const {
@@ -44,7 +53,8 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     RequireFinite(message, p.longitude_deg, "longitude_deg");
     RequireFinite(message, p.altitude_m, "altitude_m");
     if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) Reject(message, "position outside WGS84 range");
-    RequirePositive(message, p.sigma_horizontal_m, "sigma_horizontal_m");
+    RequireSigma(message, p.sigma_horizontal_m, "sigma_horizontal_m");
+    RequireSigma(message, p.sigma_vertical_m, "sigma_vertical_m");
   } else if (const auto* imu = std::get_if<ImuMessage>(&message)) {
     RequireFinite(message, imu->accel_x_mps2, "accel_x_mps2");
     RequireFinite(message, imu->accel_y_mps2, "accel_y_mps2");
@@ -69,7 +79,9 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
   } else if (const auto* vio = std::get_if<VioMessage>(&message)) {
     RequireFinite(message, vio->velocity_x_mps, "velocity_x_mps");
     RequireFinite(message, vio->velocity_y_mps, "velocity_y_mps");
-    RequirePositive(message, vio->sigma_mps, "sigma_mps");
+    RequireSigma(message, vio->sigma_mps, "sigma_mps");
+  } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message); ping && ping->range_m) {
+    RequirePositive(message, *ping->range_m, "range_m");
   }
 }
 
@@ -95,7 +107,7 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
   const double c = std::cos(heading), s = std::sin(heading);
   const Eigen::Vector2d& l = vehicle_.gnss_antenna.position_m.head<2>();
   const Eigen::Vector2d reference = antenna - Eigen::Vector2d(c * l.x() - s * l.y(), s * l.x() + c * l.y());
-  const double sigma = std::max(config_.gps.sigma_floor_m, config_.gps.sigma_scale * gps.position->sigma_horizontal_m);
+  const double sigma = GpsSigma(config_.gps, gps.fix, gps.position->sigma_horizontal_m);
   Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
                                                std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
   InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance);

@@ -196,7 +196,8 @@ TEST(PredictStep, CovarianceIsFPFtPlusQWithIdentityOutsideTheBase) {
       const StateLayout layout = StateLayout::For(vehicle, slip);
       const Eigen::Index n = layout.size;
       Eigen::VectorXd x = RandomState(n, rng);
-      const Eigen::MatrixXd p0 = test::RandomSpd(n, spd_rng, 0.1);
+      Eigen::MatrixXd p0 = test::RandomSpd(n, spd_rng, 0.1);
+      p0 = (0.5 * (p0 + p0.transpose())).eval();  // exactly symmetric input
       Eigen::MatrixXd p = p0;
       Eigen::VectorXd x_model = x;
       const BaseJacobian fb = PropagateState(x_model, 0.02);
@@ -286,7 +287,8 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
       for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
         const double distance = std::abs(v) * 0.04;
         const double radius_var = s.rolling_radius_noise_m_per_sqrt_m * s.rolling_radius_noise_m_per_sqrt_m * distance;
-        const double gradient_var = s.slip_gradient_noise_nm_per_sqrt_m * s.slip_gradient_noise_nm_per_sqrt_m * distance;
+        const double gradient_var =
+            s.slip_gradient_noise_nm_per_sqrt_m * s.slip_gradient_noise_nm_per_sqrt_m * distance;
         EXPECT_NEAR(d(layout.rolling_radius[i]), radius_var, 1e-12 * radius_var);
         EXPECT_NEAR(d(layout.slip_gradient[i]), gradient_var, 1e-12 * gradient_var);
       }

@@ -18,6 +18,8 @@
 // source, the key path and the reason (the same strict reader as the simulator's files).
 #pragma once
 
+#include "rowloc/localization/sensor_messages.hpp"
+
 #include <Eigen/Core>
 
 #include <filesystem>
@@ -58,9 +60,14 @@ struct InitialisationConfig {
   double steering_sigma_rad = 0.05;
 };
 
+/// Fix quality -> covariance: sigma = max(floor of the fix quality, sigma_scale x the receiver's
+/// sigma_horizontal_m) per horizontal axis (a receiver's claims for float and SBAS fixes are often
+/// optimistic; the floors bound them).
 struct GpsNoise {
-  double sigma_scale = 1.0;      ///< multiplies the receiver's sigma_horizontal_m, > 0
-  double sigma_floor_m = 0.005;  ///< lower bound of the used sigma, > 0
+  double sigma_scale = 1.0;             ///< multiplies the receiver's sigma_horizontal_m, > 0
+  double sigma_floor_rtk_fixed_m = 0.005;
+  double sigma_floor_rtk_float_m = 0.05;
+  double sigma_floor_sbas_m = 0.3;
   double gate_probability = 0.9999;
   /// When every fix for longer than this (s) was gated out, the filter has drifted (not the receiver):
   /// the next fix re-acquires, P's position block is inflated by y y^T and the fix applied ungated.
@@ -80,7 +87,7 @@ struct WheelNoise {
   double speed_sigma_fraction = 0.01;
   /// Side-slip sigma of the non-holonomic constraint (lateral wheel-centre velocity = 0), m/s; it
   /// is applied with every wheels message as a separate update named "nonholonomic".
-  double lateral_velocity_sigma_mps = 0.03;
+  double lateral_velocity_sigma_mps = 0.01;
   double gate_probability = 0.9999;
   double max_speed_radps = 200.0;  ///< larger |omega| is rejected as out of range
 };
@@ -109,6 +116,10 @@ struct FilterConfig {
   double max_prediction_step_s = 0.02;  ///< longer predictions are split into steps of at most this
   double max_prediction_gap_s = 5.0;    ///< a longer gap between messages is an error (clock fault)
 };
+
+/// The horizontal 1-sigma (m) used for a fix of the given quality (kNone: not a fix; throws
+/// std::invalid_argument).
+double GpsSigma(const GpsNoise& noise, GnssFixQuality fix, double receiver_sigma_horizontal_m);
 
 class FilterConfigError : public std::runtime_error {
  public:

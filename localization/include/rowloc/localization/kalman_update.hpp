@@ -8,8 +8,10 @@
 //   K   = P H^T S^-1,            x  <- x + K y
 //   P   <- (I - K H) P (I - K H)^T + K R K^T           (Joseph, Bucy & Joseph 1968; Bar-Shalom,
 //                                                       Li & Kirubarajan 2001, eq. 5.2.3-18)
-// computed as A = P - K (H P), P <- A - (A H^T) K^T + K R K^T (O(n^2 m) instead of O(n^3)), then
-// symmetrized. The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
+// computed with U = P H^T (skipping the zeros of the sparse H) as the identical
+//   P <- P - K U^T - (U - K S) K^T          (valid for any gain K, like the product form)
+// on the upper triangle only, mirrored to the lower: O(nnz(H) n + m n^2) instead of O(n^3), and P
+// exactly symmetric. The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
 #pragma once
 
 #include <Eigen/Core>
@@ -25,7 +27,8 @@ struct UpdateOutcome {
 
 /// Applies the update to (state, covariance) unless gated. gate_threshold is the NIS above which
 /// the measurement is rejected (+infinity: never). angle_index < 0: no angle state to wrap.
-/// Throws std::invalid_argument on mismatched sizes or non-finite inputs (innovation, H, R).
+/// Throws std::invalid_argument on mismatched sizes, angle_index >= state size or non-finite inputs
+/// (innovation, H, R).
 UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
                            const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
                            const Eigen::MatrixXd& noise, double gate_threshold, int angle_index);

@@ -12,7 +12,7 @@
 // are not used here (the map-aided update is issue 5).
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
-// max_speed_radps, |delta| above the vehicle's limit + 0.1 rad), a wheel count that does not match
+// max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4), a wheel count that does not match
 // and time going backwards throw FilterInputError and leave the filter unchanged. A gap longer than
 // max_prediction_gap_s is a clock or logging fault: the filter drops its state and re-initialises
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
@@ -95,7 +95,9 @@ class VehicleEkf {
   ProcessResult Apply(const UltrasonicMessage&) { return {}; }
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
-  void ProjectSlipStates();
+  /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
+  /// [0.5, 1.5] x nominal; k_s above max(T, 0) + min_slip_gradient_nm (so k_s - T > 0).
+  void ProjectStates();
   UpdateRecord Update(double time_s, const std::string& sensor, const Eigen::VectorXd& innovation,
                       const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate);
 
@@ -105,6 +107,8 @@ class VehicleEkf {
   mapio::LocalFrame frame_;
   std::vector<std::size_t> wheel_index_;  ///< message wheel j -> vehicle wheel wheel_index_[j]
   double gate_gps_, gate_imu_, gate_vio_;
+  std::vector<double> wheel_gates_;     ///< index m - 1: gate of an m-dimensional wheel/lateral update
+  std::vector<double> steering_gates_;  ///< index m - 1: gate of m steering angles
 
   bool initialised_ = false;
   double time_s_ = -std::numeric_limits<double>::infinity();

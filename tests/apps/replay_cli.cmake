@@ -1,0 +1,32 @@
+# CLI tests of 'rowloc replay' (docs/localization-filter.md): runs on a simulated log, same bytes
+# for the same log, readable by 'rowloc evaluate', and clear errors for bad input.
+set(_replay_out ${CMAKE_CURRENT_BINARY_DIR}/replay)
+set(_logs ${PROJECT_SOURCE_DIR}/tests/data/logs)
+set(_swerve ${PROJECT_SOURCE_DIR}/config/vehicles/agrimaro-swerve.json)
+file(MAKE_DIRECTORY ${_replay_out})
+# On the tiles run of simulate_cli.cmake (fixture simulate_tiles): initialises from GNSS, all updates.
+rowloc_cli_test(replay_runs_on_simulated_log ON "initialised at t=.*updates gnss: [0-9]+ accepted"
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve} -o ${_replay_out}/tiles-a.ndjson)
+rowloc_cli_reproducible_test(replay_is_deterministic ${_replay_out}/tiles-b.ndjson ${_replay_out}/tiles-a.ndjson
+                             replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                             --filter ${PROJECT_SOURCE_DIR}/config/filters/default.json -o ${_replay_out}/tiles-b.ndjson)
+rowloc_cli_test(replay_output_evaluates ON "position, total \\[m\\] +[0-9]+ +0\\.0[0-4]"
+                evaluate ${_sim_out}/tiles-a/truth.ndjson ${_replay_out}/tiles-a.ndjson --clip-to-truth
+                -o ${_replay_out}/tiles-a-report --no-plots)
+set_tests_properties(apps.replay_runs_on_simulated_log PROPERTIES FIXTURES_REQUIRED simulate_tiles
+                     FIXTURES_SETUP replay_tiles)
+set_tests_properties(apps.replay_is_deterministic apps.replay_output_evaluates
+                     PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_tiles")
+# An out-of-range message is rejected by line number, counted, and the replay goes on.
+rowloc_cli_test(replay_reports_rejected_input ON
+                "out-of-range.ndjson:9: rejected: wheels at t=0.02 s: .speed_radps. above.*1 rejected inputs"
+                replay ${_logs}/agrimaro-tiles-out-of-range.ndjson --vehicle ${_swerve} -o ${_replay_out}/range.ndjson)
+rowloc_cli_test(replay_rejects_missing_log OFF "no-such-log.ndjson: cannot open sensor log"
+                replay no-such-log.ndjson --vehicle ${_swerve} -o ${_replay_out}/missing.ndjson)
+rowloc_cli_test(replay_rejects_missing_vehicle OFF "no-such-vehicle.json: cannot open vehicle file"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle no-such-vehicle.json -o ${_replay_out}/x.ndjson)
+rowloc_cli_test(replay_rejects_bad_filter OFF "bad-gate.json: gps.gate_probability must be in \\(0, 1\\)"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/bad-gate.json -o ${_replay_out}/x.ndjson)
+rowloc_cli_test(replay_rejects_wrong_vehicle OFF "'left' is not a wheel of the vehicle 'agrimaro-swerve'|wheel order"
+                replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_swerve} -o ${_replay_out}/x.ndjson)

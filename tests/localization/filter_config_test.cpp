@@ -1,0 +1,309 @@
+// Filter configuration files (filter_config.hpp): the shipped files, and clear errors that name
+// the source and the key path.
+#include "rowloc/localization/filter_config.hpp"
+
+#include "test_support.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest-spi.h>
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace rowloc::localization {
+namespace {
+
+using ::testing::AllOf;
+using ::testing::HasSubstr;
+using nlohmann::json;
+
+std::filesystem::path FilterFile(const std::string& name) {
+  return test::SourceDir() / "config" / "filters" / (name + ".json");
+}
+
+void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
+  EXPECT_EQ(a.name, b.name);
+  const ProcessNoise &qa = a.process_noise, &qb = b.process_noise;
+  EXPECT_EQ(qa.jerk_mps3_per_sqrt_hz, qb.jerk_mps3_per_sqrt_hz);
+  EXPECT_EQ(qa.yaw_acceleration_radps2_per_sqrt_hz, qb.yaw_acceleration_radps2_per_sqrt_hz);
+  EXPECT_EQ(qa.velocity_mps_per_sqrt_hz, qb.velocity_mps_per_sqrt_hz);
+  EXPECT_EQ(qa.steering_rate_radps_per_sqrt_hz, qb.steering_rate_radps_per_sqrt_hz);
+  EXPECT_EQ(qa.gyro_bias_radps_per_sqrt_hz, qb.gyro_bias_radps_per_sqrt_hz);
+  const SlipAwareOdometryConfig &sa = a.slip_aware_odometry, &sb = b.slip_aware_odometry;
+  EXPECT_EQ(sa.enabled, sb.enabled);
+  EXPECT_EQ(sa.rolling_radius_sigma_m, sb.rolling_radius_sigma_m);
+  EXPECT_EQ(sa.slip_gradient_initial_nm, sb.slip_gradient_initial_nm);
+  EXPECT_EQ(sa.slip_gradient_sigma_nm, sb.slip_gradient_sigma_nm);
+  EXPECT_EQ(sa.min_slip_gradient_nm, sb.min_slip_gradient_nm);
+  EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
+  EXPECT_EQ(sa.slip_gradient_noise_nm_per_sqrt_m, sb.slip_gradient_noise_nm_per_sqrt_m);
+  const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
+  EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
+  EXPECT_EQ(ia.heading_sigma_rad, ib.heading_sigma_rad);
+  EXPECT_EQ(ia.velocity_sigma_mps, ib.velocity_sigma_mps);
+  EXPECT_EQ(ia.yaw_rate_sigma_radps, ib.yaw_rate_sigma_radps);
+  EXPECT_EQ(ia.acceleration_sigma_mps2, ib.acceleration_sigma_mps2);
+  EXPECT_EQ(ia.gyro_bias_sigma_radps, ib.gyro_bias_sigma_radps);
+  EXPECT_EQ(ia.steering_sigma_rad, ib.steering_sigma_rad);
+  EXPECT_EQ(a.gps.sigma_scale, b.gps.sigma_scale);
+  EXPECT_EQ(a.gps.sigma_floor_rtk_fixed_m, b.gps.sigma_floor_rtk_fixed_m);
+  EXPECT_EQ(a.gps.sigma_floor_rtk_float_m, b.gps.sigma_floor_rtk_float_m);
+  EXPECT_EQ(a.gps.sigma_floor_sbas_m, b.gps.sigma_floor_sbas_m);
+  EXPECT_EQ(a.gps.gate_probability, b.gps.gate_probability);
+  EXPECT_EQ(a.gps.reacquire_after_s, b.gps.reacquire_after_s);
+  EXPECT_EQ(a.imu.accel_sigma_mps2, b.imu.accel_sigma_mps2);
+  EXPECT_EQ(a.imu.gyro_sigma_radps, b.imu.gyro_sigma_radps);
+  EXPECT_EQ(a.imu.gate_probability, b.imu.gate_probability);
+  EXPECT_EQ(a.wheels.speed_sigma_radps, b.wheels.speed_sigma_radps);
+  EXPECT_EQ(a.wheels.speed_sigma_fraction, b.wheels.speed_sigma_fraction);
+  EXPECT_EQ(a.wheels.lateral_velocity_sigma_mps, b.wheels.lateral_velocity_sigma_mps);
+  EXPECT_EQ(a.wheels.gate_probability, b.wheels.gate_probability);
+  EXPECT_EQ(a.wheels.max_speed_radps, b.wheels.max_speed_radps);
+  EXPECT_EQ(a.steering.angle_sigma_rad, b.steering.angle_sigma_rad);
+  EXPECT_EQ(a.steering.gate_probability, b.steering.gate_probability);
+  EXPECT_EQ(a.vio.position_m, b.vio.position_m);
+  EXPECT_EQ(a.vio.sigma_scale, b.vio.sigma_scale);
+  EXPECT_EQ(a.vio.gate_probability, b.vio.gate_probability);
+  EXPECT_EQ(a.max_prediction_step_s, b.max_prediction_step_s);
+  EXPECT_EQ(a.max_prediction_gap_s, b.max_prediction_gap_s);
+}
+
+json DefaultJson() {
+  std::ifstream in(FilterFile("default"));
+  return json::parse(in);
+}
+
+// The error message of parsing `document` ("" if it parses).
+std::string ErrorOf(const std::string& text) {
+  try {
+    ParseFilterConfig(text, "edited.json");
+  } catch (const FilterConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+std::string ErrorOf(const json& document) { return ErrorOf(document.dump()); }
+
+// Dotted key paths ("gps.gate_probability") and JSON pointers of every leaf value of the file.
+std::vector<std::pair<std::string, json::json_pointer>> Leaves(const json& object, const std::string& prefix = "",
+                                                               const json::json_pointer& at = json::json_pointer()) {
+  std::vector<std::pair<std::string, json::json_pointer>> leaves;
+  for (const auto& item : object.items()) {
+    const std::string path = prefix.empty() ? item.key() : prefix + "." + item.key();
+    const json::json_pointer pointer = at / item.key();
+    if (item.value().is_object()) {
+      for (auto& leaf : Leaves(item.value(), path, pointer)) leaves.push_back(std::move(leaf));
+    } else {
+      leaves.emplace_back(path, pointer);
+    }
+  }
+  return leaves;
+}
+
+TEST(FilterConfig, DefaultFileEqualsTheInCodeDefaults) {
+  const FilterConfig loaded = LoadFilterConfig(FilterFile("default"));
+  ExpectEqualConfigs(loaded, FilterConfig{});
+  EXPECT_EQ(FilterConfigProblem(FilterConfig{}), std::nullopt);
+}
+
+TEST(FilterConfig, NoSlipModelFileDiffersOnlyInNameSlipSwitchAndWheelSigma) {
+  // Without slip-aware odometry the wheel noise carries the terrain's slip range (filter_config.hpp).
+  const FilterConfig loaded = LoadFilterConfig(FilterFile("no-slip-model"));
+  FilterConfig expected;
+  expected.name = "no-slip-model";
+  expected.slip_aware_odometry.enabled = false;
+  expected.wheels.speed_sigma_fraction = 0.1;
+  ExpectEqualConfigs(loaded, expected);
+  EXPECT_TRUE(FilterConfig{}.slip_aware_odometry.enabled);  // the default is slip-aware
+}
+
+TEST(FilterConfig, EqualityHelperSeesADifference) {
+  FilterConfig other;
+  other.vio.gate_probability = 0.99;
+  EXPECT_NONFATAL_FAILURE(ExpectEqualConfigs(FilterConfig{}, other), "gate_probability");
+}
+
+TEST(FilterConfig, EveryMissingKeyIsNamed) {
+  const json base = DefaultJson();
+  const auto leaves = Leaves(base);
+  EXPECT_EQ(leaves.size(), 41u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  for (const auto& [path, pointer] : leaves) {
+    json edited = base;
+    edited.at(pointer.parent_pointer()).erase(pointer.back());
+    EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: " + path + ": missing key"))) << path;
+  }
+  for (const char* section : {"process_noise", "slip_aware_odometry", "initialisation", "gps", "imu", "wheels",
+                              "steering", "vio"}) {
+    json edited = base;
+    edited.erase(section);
+    EXPECT_THAT(ErrorOf(edited), HasSubstr(std::string(section) + ": missing key")) << section;
+  }
+}
+
+TEST(FilterConfig, UnknownKeysAreNamed) {
+  json edited = DefaultJson();
+  edited["gps"]["sigma_scal"] = 1.0;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: gps.sigma_scal: unknown key"));
+  edited = DefaultJson();
+  edited["slip_aware_odometry"]["extra"] = true;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.extra: unknown key"));
+  edited = DefaultJson();
+  edited["lidar"] = json::object();
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: lidar: unknown key"));
+}
+
+TEST(FilterConfig, WrongTypesAreNamed) {
+  const json base = DefaultJson();
+  for (const auto& [path, pointer] : Leaves(base)) {
+    json edited = base;
+    edited[pointer] = json::array({"x"});  // wrong for every leaf
+    const std::string error = ErrorOf(edited);
+    EXPECT_THAT(error, HasSubstr("edited.json: " + path)) << path;
+    EXPECT_THAT(error, HasSubstr("must be")) << path;
+  }
+  json edited = base;
+  edited["slip_aware_odometry"]["enabled"] = 1;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.enabled: must be true or false, got number"));
+  edited = base;
+  edited["wheels"]["max_speed_radps"] = "200";
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("wheels.max_speed_radps: must be a number, got string"));
+  edited = base;
+  edited["name"] = 3;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("name: must be a string"));
+  edited = base;
+  edited["vio"]["position_m"] = json::array({0.0});
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("vio.position_m: must be an array of 2 numbers"));
+  edited = base;
+  edited["imu"] = 5;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("imu: must be an object"));
+  EXPECT_THAT(ErrorOf(std::string("[1, 2]")), AllOf(HasSubstr("edited.json"), HasSubstr("must be an object")));
+}
+
+TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
+  // JSON has no NaN or infinity literal; a number too large for a double is a parse error.
+  json document = DefaultJson();
+  document["imu"]["gyro_sigma_radps"] = 12345.5;  // a marker, replaced in the text
+  const std::string text = document.dump();
+  const std::string key = "\"gyro_sigma_radps\":12345.5";
+  ASSERT_NE(text.find(key), std::string::npos);
+  EXPECT_THAT(ErrorOf(std::string(text).replace(text.find(key), key.size(), "\"gyro_sigma_radps\":1e999")),
+              AllOf(HasSubstr("edited.json"), HasSubstr("invalid JSON"), HasSubstr("1e999")));
+  EXPECT_THAT(ErrorOf(std::string(text).replace(text.find(key), key.size(), "\"gyro_sigma_radps\":NaN")),
+              AllOf(HasSubstr("edited.json"), HasSubstr("invalid JSON")));
+  EXPECT_THAT(ErrorOf(std::string("{ \"name\": ")), AllOf(HasSubstr("edited.json"), HasSubstr("invalid JSON")));
+}
+
+TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
+  const json base = DefaultJson();
+  for (const auto& [path, pointer] : Leaves(base)) {
+    if (!base[pointer].is_number()) continue;  // name, enabled, position_m
+    const bool probability = path.ends_with("gate_probability");
+    for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
+      json edited = base;
+      edited[pointer] = bad;
+      EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: " + path),
+                                         HasSubstr(probability ? "must be in (0, 1)" : "must be finite and > 0")))
+          << path << " = " << bad;
+    }
+  }
+}
+
+TEST(FilterConfig, PredictionGapMustCoverTheStep) {
+  json edited = DefaultJson();
+  edited["max_prediction_gap_s"] = 0.01;  // < max_prediction_step_s = 0.02
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: max_prediction_gap_s must be >= max_prediction_step_s"));
+  edited["max_prediction_gap_s"] = 0.02;  // equal is fine
+  EXPECT_EQ(ErrorOf(edited), "");
+}
+
+TEST(FilterConfig, MissingFileIsAFilterConfigError) {
+  const test::ScratchDir scratch;
+  const auto missing = scratch / "absent.json";
+  try {
+    LoadFilterConfig(missing);
+    ADD_FAILURE() << "no error for a missing file";
+  } catch (const FilterConfigError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("absent.json"), HasSubstr("cannot open")));
+  }
+}
+
+TEST(FilterConfig, ProblemOfInCodeConfigsNamesTheField) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  using Edit = std::function<void(FilterConfig&, double)>;
+  const std::vector<std::pair<std::string, Edit>> fields = {
+      {"process_noise.jerk_mps3_per_sqrt_hz",
+       [](FilterConfig& c, double v) { c.process_noise.jerk_mps3_per_sqrt_hz = v; }},
+      {"process_noise.gyro_bias_radps_per_sqrt_hz",
+       [](FilterConfig& c, double v) { c.process_noise.gyro_bias_radps_per_sqrt_hz = v; }},
+      {"slip_aware_odometry.slip_gradient_initial_nm",
+       [](FilterConfig& c, double v) { c.slip_aware_odometry.slip_gradient_initial_nm = v; }},
+      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
+       [](FilterConfig& c, double v) { c.slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m = v; }},
+      {"initialisation.heading_baseline_m", [](FilterConfig& c, double v) { c.initialisation.heading_baseline_m = v; }},
+      {"gps.sigma_floor_sbas_m", [](FilterConfig& c, double v) { c.gps.sigma_floor_sbas_m = v; }},
+      {"imu.gyro_sigma_radps", [](FilterConfig& c, double v) { c.imu.gyro_sigma_radps = v; }},
+      {"wheels.speed_sigma_radps", [](FilterConfig& c, double v) { c.wheels.speed_sigma_radps = v; }},
+      {"wheels.lateral_velocity_sigma_mps", [](FilterConfig& c, double v) { c.wheels.lateral_velocity_sigma_mps = v; }},
+      {"steering.angle_sigma_rad", [](FilterConfig& c, double v) { c.steering.angle_sigma_rad = v; }},
+      {"vio.sigma_scale", [](FilterConfig& c, double v) { c.vio.sigma_scale = v; }},
+      {"max_prediction_step_s", [](FilterConfig& c, double v) { c.max_prediction_step_s = v; }},
+      {"gps.gate_probability", [](FilterConfig& c, double v) { c.gps.gate_probability = v; }},
+      {"wheels.gate_probability", [](FilterConfig& c, double v) { c.wheels.gate_probability = v; }},
+  };
+  for (const auto& [key, edit] : fields) {
+    for (const double bad : {0.0, -1.0, kNaN, kInf}) {
+      FilterConfig config;
+      edit(config, bad);
+      const auto problem = FilterConfigProblem(config);
+      ASSERT_TRUE(problem.has_value()) << key << " = " << bad;
+      EXPECT_THAT(*problem, HasSubstr(key)) << bad;
+    }
+  }
+  FilterConfig config;
+  config.gps.gate_probability = 1.0;
+  EXPECT_EQ(FilterConfigProblem(config), std::optional<std::string>("gps.gate_probability must be in (0, 1)"));
+  config = FilterConfig{};
+  config.max_prediction_step_s = kInf;
+  EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("max_prediction_step_s"));
+  config = FilterConfig{};
+  config.vio.position_m.x() = kNaN;
+  EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("vio.position_m"));
+  config = FilterConfig{};
+  config.name.clear();
+  EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("name"));
+  config = FilterConfig{};
+  config.max_prediction_gap_s = 0.5 * config.max_prediction_step_s;
+  EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("max_prediction_gap_s"));
+}
+
+}  // namespace
+}  // namespace rowloc::localization
+
+namespace rowloc::localization {
+namespace {
+
+TEST(GpsSigma, FloorOfTheFixQualityBoundsTheReceiversClaim) {
+  const GpsNoise noise;  // floors 5 mm (RTK fixed), 5 cm (float), 0.3 m (SBAS), scale 1
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFixed, 0.001), 0.005);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFixed, 0.02), 0.02);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFloat, 0.01), 0.05);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kSbas, 0.1), 0.3);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kSbas, 0.8), 0.8);
+  GpsNoise scaled = noise;
+  scaled.sigma_scale = 2.0;
+  EXPECT_DOUBLE_EQ(GpsSigma(scaled, GnssFixQuality::kRtkFixed, 0.01), 0.02);
+  EXPECT_THROW(GpsSigma(noise, GnssFixQuality::kNone, 0.01), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rowloc::localization

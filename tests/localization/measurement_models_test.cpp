@@ -1,0 +1,320 @@
+// Measurement models of the vehicle EKF (measurement_models.hpp): Jacobians against central
+// differences for every shipped vehicle, and physical checks of each model.
+#include "rowloc/localization/measurement_models.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <optional>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rowloc::localization {
+namespace {
+
+using L = StateLayout;
+constexpr double kPi = std::numbers::pi;
+
+std::vector<mapio::VehicleConfig> ShippedVehicles() {
+  return {mapio::AgrimaroSwerveConfig(), mapio::VineyardUgv4wsConfig(), mapio::DifferentialDriveConfig(),
+          mapio::TrackedVehicleConfig()};
+}
+
+Eigen::Vector2d Horizontal(const Eigen::Vector3d& p) { return p.head<2>(); }
+
+Eigen::VectorXd RandomState(const StateLayout& layout, std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd x(layout.size);
+  for (Eigen::Index i = 0; i < x.size(); ++i) x(i) = u(rng);
+  x(L::kX) = 50.0 * u(rng);
+  x(L::kY) = 50.0 * u(rng);
+  x(L::kPhi) = 3.0 * u(rng);
+  x(L::kVx) = 3.0 * u(rng);
+  x(L::kYawRate) = 1.5 * u(rng);
+  for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
+    if (layout.steering[i] >= 0) x(layout.steering[i]) = 1.5 * u(rng);
+    if (layout.rolling_radius[i] >= 0) x(layout.rolling_radius[i]) = 0.2 + 0.05 * u(rng);
+    if (layout.slip_gradient[i] >= 0) x(layout.slip_gradient[i]) = 500.0 + 300.0 * u(rng);
+  }
+  return x;
+}
+
+using Model = std::function<LinearizedMeasurement(const Eigen::VectorXd&)>;
+
+// Checks m(x).jacobian against central differences of m(x).predicted, all states.
+void ExpectJacobianMatchesNumeric(const Model& model, const Eigen::VectorXd& x, const std::string& what) {
+  const LinearizedMeasurement m = model(x);
+  ASSERT_EQ(m.jacobian.rows(), m.predicted.size()) << what;
+  ASSERT_EQ(m.jacobian.cols(), x.size()) << what;
+  for (Eigen::Index j = 0; j < x.size(); ++j) {
+    const double h = 1e-6 * std::max(1.0, std::abs(x(j)));
+    Eigen::VectorXd plus = x, minus = x;
+    plus(j) += h;
+    minus(j) -= h;
+    const Eigen::VectorXd numeric = (model(plus).predicted - model(minus).predicted) / (2.0 * h);
+    for (Eigen::Index i = 0; i < numeric.size(); ++i) {
+      EXPECT_NEAR(m.jacobian(i, j), numeric(i), 1e-6 * std::max(1.0, std::abs(numeric(i))))
+          << what << ": dh" << i << "/dx" << j;
+    }
+  }
+}
+
+TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
+  std::mt19937 rng(51);
+  std::uniform_real_distribution<double> torque(-100.0, 100.0);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    for (bool slip : {false, true}) {
+      SCOPED_TRACE(vehicle.name + (slip ? " slip-aware" : ""));
+      const StateLayout layout = StateLayout::For(vehicle, slip);
+      std::vector<std::size_t> steerable;
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        if (vehicle.wheels[i].steerable) steerable.push_back(i);
+      }
+      for (int trial = 0; trial < 40; ++trial) {
+        const Eigen::VectorXd x = RandomState(layout, rng);
+        std::vector<double> torques(vehicle.wheels.size());
+        for (double& t : torques) t = torque(rng);  // |T| <= 100 < k_s
+        const Eigen::Vector2d gnss = Horizontal(vehicle.gnss_antenna.position_m);
+        const Eigen::Vector2d imu = Horizontal(vehicle.imu.position_m);
+        const Eigen::Vector2d arm(0.3 * (trial % 5) - 0.6, 0.7 - 0.2 * (trial % 7));  // also non-shipped arms
+        ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return GpsAntennaModel(s, gnss); }, x, "gps");
+        ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return GpsAntennaModel(s, arm); }, x, "gps arm");
+        ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, imu); }, x, "imu");
+        ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, arm); }, x, "imu arm");
+        ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return VioModel(s, arm); }, x, "vio");
+        ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt); }, x, "wheels");
+        ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, torques); }, x,
+            "wheels with torque");
+        ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelLateralVelocityModel(s, vehicle, layout); }, x, "lateral");
+        if (!steerable.empty()) {
+          ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return SteeringModel(s, layout, steerable); },
+                                       x, "steering");
+        }
+      }
+    }
+  }
+}
+
+TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
+  // The wheel model of the swerve robot: wheel i depends on its own delta, R and k only.
+  const mapio::VehicleConfig vehicle = mapio::AgrimaroSwerveConfig();
+  const StateLayout layout = StateLayout::For(vehicle, true);
+  std::mt19937 rng(52);
+  const Eigen::VectorXd x = RandomState(layout, rng);
+  const LinearizedMeasurement m = WheelSpeedModel(x, vehicle, layout, std::vector<double>{10.0, -20.0, 30.0});
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (std::size_t other = 0; other < 3; ++other) {
+      if (other == i) continue;
+      const auto row = static_cast<Eigen::Index>(i);
+      EXPECT_EQ(m.jacobian(row, layout.steering[other]), 0.0);
+      EXPECT_EQ(m.jacobian(row, layout.rolling_radius[other]), 0.0);
+      EXPECT_EQ(m.jacobian(row, layout.slip_gradient[other]), 0.0);
+    }
+    for (int base : {L::kX, L::kY, L::kPhi, L::kAx, L::kAy, L::kGyroBias}) {
+      EXPECT_EQ(m.jacobian(static_cast<Eigen::Index>(i), base), 0.0);
+    }
+  }
+}
+
+TEST(WheelSpeedModel, StraightDriveGivesEqualWheelSpeeds) {
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    SCOPED_TRACE(vehicle.name);
+    const StateLayout layout = StateLayout::For(vehicle, false);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(L::kPhi) = 0.7;  // heading and position do not matter
+    x(L::kX) = 12.0;
+    x(L::kVx) = 1.3;   // every delta = 0
+    const LinearizedMeasurement m = WheelSpeedModel(x, vehicle, layout, std::nullopt);
+    ASSERT_EQ(m.predicted.size(), static_cast<Eigen::Index>(vehicle.wheels.size()));
+    for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+      EXPECT_NEAR(m.predicted(static_cast<Eigen::Index>(i)), 1.3 / vehicle.wheels[i].nominal_radius_m, 1e-14);
+    }
+  }
+}
+
+TEST(WheelSpeedModel, SwerveWheelsAlignedWithTheirVelocityRollAtItsMagnitude) {
+  std::mt19937 rng(53);
+  for (const mapio::VehicleConfig& vehicle : {mapio::AgrimaroSwerveConfig(), mapio::VineyardUgv4wsConfig()}) {
+    const StateLayout layout = StateLayout::For(vehicle, false);
+    for (int trial = 0; trial < 20; ++trial) {
+      Eigen::VectorXd x = RandomState(layout, rng);
+      std::vector<double> expected;
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        const Eigen::Vector2d l = vehicle.wheels[i].position_m;
+        const Eigen::Vector2d v(x(L::kVx) - x(L::kYawRate) * l.y(), x(L::kVy) + x(L::kYawRate) * l.x());
+        x(layout.steering[i]) = std::atan2(v.y(), v.x());  // wheel heading along the centre velocity
+        expected.push_back(v.norm() / vehicle.wheels[i].nominal_radius_m);
+        // Turned by 90 degrees, the wheel would not roll at all.
+        Eigen::VectorXd across = x;
+        across(layout.steering[i]) += kPi / 2;
+        EXPECT_NEAR(WheelLongitudinalVelocity(across, vehicle, layout, i), 0.0, 1e-12);
+      }
+      const LinearizedMeasurement m = WheelSpeedModel(x, vehicle, layout, std::nullopt);
+      for (std::size_t i = 0; i < expected.size(); ++i) {
+        EXPECT_NEAR(m.predicted(static_cast<Eigen::Index>(i)), expected[i], 1e-12) << vehicle.name << " " << i;
+      }
+    }
+  }
+}
+
+TEST(WheelLateralVelocityModel, WheelCentreVelocityAcrossTheWheel) {
+  std::mt19937 rng(56);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    SCOPED_TRACE(vehicle.name);
+    const StateLayout layout = StateLayout::For(vehicle, false);
+    // Straight ahead with every delta = 0: no sideways velocity at any wheel.
+    Eigen::VectorXd straight = Eigen::VectorXd::Zero(layout.size);
+    straight(L::kVx) = 1.7;
+    EXPECT_EQ(WheelLateralVelocityModel(straight, vehicle, layout).predicted.cwiseAbs().maxCoeff(), 0.0);
+    // Random twist: along^2 + across^2 = |wheel-centre velocity|^2, and across = v . (-sin, cos).
+    for (int trial = 0; trial < 20; ++trial) {
+      const Eigen::VectorXd x = RandomState(layout, rng);
+      const LinearizedMeasurement m = WheelLateralVelocityModel(x, vehicle, layout);
+      ASSERT_EQ(m.predicted.size(), static_cast<Eigen::Index>(vehicle.wheels.size()));
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        const Eigen::Vector2d l = vehicle.wheels[i].position_m;
+        const Eigen::Vector2d v(x(L::kVx) - x(L::kYawRate) * l.y(), x(L::kVy) + x(L::kYawRate) * l.x());
+        const double delta = layout.steering[i] >= 0 ? x(layout.steering[i]) : 0.0;
+        const double across = m.predicted(static_cast<Eigen::Index>(i));
+        EXPECT_NEAR(across, -std::sin(delta) * v.x() + std::cos(delta) * v.y(), 1e-14);
+        const double along = WheelLongitudinalVelocity(x, vehicle, layout, i);
+        EXPECT_NEAR(along * along + across * across, v.squaredNorm(), 1e-12);
+      }
+    }
+  }
+  // Differential drive sliding sideways at 0.2 m/s: both wheels see it.
+  const mapio::VehicleConfig diff = mapio::DifferentialDriveConfig();
+  const StateLayout layout = StateLayout::For(diff, false);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+  x(L::kVy) = 0.2;
+  EXPECT_NEAR((WheelLateralVelocityModel(x, diff, layout).predicted - Eigen::Vector2d(0.2, 0.2)).norm(), 0.0, 1e-15);
+}
+
+TEST(WheelSpeedModel, DifferentialDriveTurningOnTheSpot) {
+  const mapio::VehicleConfig vehicle = mapio::DifferentialDriveConfig();  // wheels at y = +-0.28 m
+  const StateLayout layout = StateLayout::For(vehicle, false);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+  x(L::kYawRate) = 0.5;  // counter-clockwise: left wheel backwards, right wheel forwards
+  const LinearizedMeasurement m = WheelSpeedModel(x, vehicle, layout, std::nullopt);
+  EXPECT_NEAR(m.predicted(0), -0.5 * 0.28 / 0.165, 1e-14);
+  EXPECT_NEAR(m.predicted(1), 0.5 * 0.28 / 0.165, 1e-14);
+}
+
+TEST(WheelSpeedModel, SlipAwareOdometerFollowsSeed004) {
+  std::mt19937 rng(54);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    const StateLayout layout = StateLayout::For(vehicle, true);
+    for (int trial = 0; trial < 20; ++trial) {
+      const Eigen::VectorXd x = RandomState(layout, rng);
+      std::vector<double> torques;
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) torques.push_back(40.0 * static_cast<double>(i) - 30.0);
+      const LinearizedMeasurement with = WheelSpeedModel(x, vehicle, layout, torques);
+      const LinearizedMeasurement without = WheelSpeedModel(x, vehicle, layout, std::nullopt);
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        const auto row = static_cast<Eigen::Index>(i);
+        const double v = WheelLongitudinalVelocity(x, vehicle, layout, i);
+        const double radius = x(layout.rolling_radius[i]), k = x(layout.slip_gradient[i]);
+        EXPECT_EQ(WheelRollingRadius(x, vehicle, layout, i), radius);
+        EXPECT_NEAR(with.predicted(row), v * k / (radius * (k - torques[i])), 1e-12 * std::abs(v / radius) + 1e-15);
+        EXPECT_NEAR(without.predicted(row), v / radius, 1e-12 * std::abs(v / radius) + 1e-15);  // T = 0
+        // Driving torque (T > 0): the odometer reads more than the true speed (the wheel slips).
+        if (torques[i] > 0 && v > 0) {
+          EXPECT_GT(with.predicted(row), without.predicted(row));
+        }
+      }
+    }
+  }
+}
+
+TEST(WheelSpeedModel, RejectsAWrongTorqueCount) {
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    for (bool slip : {false, true}) {
+      const StateLayout layout = StateLayout::For(vehicle, slip);
+      const Eigen::VectorXd x = Eigen::VectorXd::Constant(layout.size, 0.5);
+      const std::vector<double> short_list(vehicle.wheels.size() - 1, 1.0), long_list(vehicle.wheels.size() + 1, 1.0);
+      EXPECT_THROW(WheelSpeedModel(x, vehicle, layout, short_list), std::invalid_argument) << vehicle.name;
+      EXPECT_THROW(WheelSpeedModel(x, vehicle, layout, long_list), std::invalid_argument) << vehicle.name;
+      EXPECT_THROW(WheelSpeedModel(x, vehicle, layout, std::vector<double>{}), std::invalid_argument);
+      EXPECT_NO_THROW(WheelSpeedModel(x, vehicle, layout, std::vector<double>(vehicle.wheels.size(), 1.0)));
+    }
+  }
+}
+
+TEST(SteeringModel, ObservesTheSteeringStatesAndRejectsFixedWheels) {
+  const mapio::VehicleConfig swerve = mapio::AgrimaroSwerveConfig();
+  const StateLayout layout = StateLayout::For(swerve, true);
+  std::mt19937 rng(55);
+  const Eigen::VectorXd x = RandomState(layout, rng);
+  const LinearizedMeasurement m = SteeringModel(x, layout, {2, 0});
+  ASSERT_EQ(m.predicted.size(), 2);
+  EXPECT_EQ(m.predicted(0), x(layout.steering[2]));
+  EXPECT_EQ(m.predicted(1), x(layout.steering[0]));
+  EXPECT_EQ(m.jacobian.row(0).sum(), 1.0);
+  EXPECT_EQ(m.jacobian(0, layout.steering[2]), 1.0);
+
+  for (const mapio::VehicleConfig& fixed : {mapio::DifferentialDriveConfig(), mapio::TrackedVehicleConfig()}) {
+    const StateLayout fixed_layout = StateLayout::For(fixed, false);
+    const Eigen::VectorXd y = Eigen::VectorXd::Zero(fixed_layout.size);
+    EXPECT_THROW(SteeringModel(y, fixed_layout, {0}), std::invalid_argument) << fixed.name;
+    EXPECT_THROW(SteeringModel(y, fixed_layout, {1}), std::invalid_argument) << fixed.name;
+  }
+  EXPECT_ANY_THROW(SteeringModel(x, layout, {3}));  // no such wheel
+}
+
+TEST(GpsAntennaModel, LeverArmRotatesWithTheHeading) {
+  const Eigen::Vector2d l = Horizontal(mapio::AgrimaroSwerveConfig().gnss_antenna.position_m);  // (0, -0.4)
+  ASSERT_GT(l.norm(), 0.0);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(L::kBaseSize);
+  x(L::kX) = 5.0;
+  x(L::kY) = -3.0;
+  for (int k = -8; k <= 8; ++k) {
+    x(L::kPhi) = k * kPi / 8;
+    const LinearizedMeasurement m = GpsAntennaModel(x, l);
+    const Eigen::Vector2d offset = m.predicted - Eigen::Vector2d(5.0, -3.0);
+    EXPECT_NEAR(offset.norm(), l.norm(), 1e-14);
+    // The offset is l turned by the heading: same length, direction atan2(l) + phi.
+    const double direction = std::atan2(l.y(), l.x()) + x(L::kPhi);
+    EXPECT_NEAR((offset - l.norm() * Eigen::Vector2d(std::cos(direction), std::sin(direction))).norm(), 0.0, 1e-14)
+        << k;
+  }
+  x(L::kPhi) = 0.0;  // heading east: the antenna 0.4 m right of the vehicle is 0.4 m south
+  EXPECT_NEAR((GpsAntennaModel(x, l).predicted - Eigen::Vector2d(5.0, -3.4)).norm(), 0.0, 1e-15);
+  x(L::kPhi) = kPi / 2;  // heading north: it is 0.4 m east
+  EXPECT_NEAR((GpsAntennaModel(x, l).predicted - Eigen::Vector2d(5.4, -3.0)).norm(), 0.0, 1e-15);
+  // Without a lever arm the antenna is the reference point whatever the heading.
+  EXPECT_EQ(GpsAntennaModel(x, Eigen::Vector2d::Zero()).predicted, Eigen::Vector2d(5.0, -3.0));
+}
+
+TEST(ImuModel, CentripetalTermAndGyroBias) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(L::kBaseSize);
+  x(L::kAx) = 0.2;
+  x(L::kAy) = 0.6;
+  x(L::kYawRate) = 0.5;
+  x(L::kGyroBias) = 0.01;
+  const LinearizedMeasurement at_reference = ImuModel(x, Eigen::Vector2d::Zero());
+  EXPECT_NEAR((at_reference.predicted - Eigen::Vector3d(0.2, 0.6, 0.51)).norm(), 0.0, 1e-15);
+  // 1 m ahead of the reference point the IMU feels r^2 l towards the centre of rotation.
+  const LinearizedMeasurement ahead = ImuModel(x, Eigen::Vector2d(1.0, -0.5));
+  EXPECT_NEAR((ahead.predicted - Eigen::Vector3d(0.2 - 0.25, 0.6 + 0.125, 0.51)).norm(), 0.0, 1e-15);
+}
+
+TEST(VioModel, VelocityOfTheCameraPoint) {
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(L::kBaseSize);
+  x(L::kVx) = 1.0;
+  x(L::kVy) = 0.1;
+  x(L::kYawRate) = 0.4;
+  // Camera at (0.5, 0.25): v + r x l = (1 - 0.4 * 0.25, 0.1 + 0.4 * 0.5).
+  const LinearizedMeasurement m = VioModel(x, Eigen::Vector2d(0.5, 0.25));
+  EXPECT_NEAR((m.predicted - Eigen::Vector2d(0.9, 0.3)).norm(), 0.0, 1e-15);
+}
+
+}  // namespace
+}  // namespace rowloc::localization
