@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -35,6 +36,9 @@ void RequireSigma(const SensorMessage& message, double value, const char* field)
   RequirePositive(message, value, field);
   if (value > kMaxSigma) Reject(message, std::string(field) + " above 1e4 (out of range)");
 }
+
+/// Minimum GNSS baseline for the initial heading, in fix sigmas.
+constexpr double kBaselineSigmas = 10.0;
 
 }  // namespace
 
@@ -91,7 +95,12 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
     return std::nullopt;
   }
   const Eigen::Vector2d moved = antenna - *anchor_enu_;
-  if (moved.norm() < config_.initialisation.heading_baseline_m) return std::nullopt;
+  // The course of the baseline has an error of about sqrt(2) sigma / |baseline| rad: the baseline
+  // must also be long against the fix noise (10 sigma: 0.14 rad, inside heading_sigma_rad's default).
+  const double fix_sigma = GpsSigma(config_.gps, gps.fix, gps.position->sigma_horizontal_m);
+  if (moved.norm() < std::max(config_.initialisation.heading_baseline_m, kBaselineSigmas * fix_sigma)) {
+    return std::nullopt;
+  }
   // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
   // angle (a crabbing swerve robot moves at delta to its heading).
   double mean_speed = 0.0, mean_steering = 0.0;
@@ -107,7 +116,7 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
   const double c = std::cos(heading), s = std::sin(heading);
   const Eigen::Vector2d& l = vehicle_.gnss_antenna.position_m.head<2>();
   const Eigen::Vector2d reference = antenna - Eigen::Vector2d(c * l.x() - s * l.y(), s * l.x() + c * l.y());
-  const double sigma = GpsSigma(config_.gps, gps.fix, gps.position->sigma_horizontal_m);
+  const double sigma = fix_sigma;
   Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
                                                std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
   InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance);

@@ -6,7 +6,8 @@
 // (process_model.hpp, in steps of at most max_prediction_step_s), then the message's measurement
 // is applied as one sequential update (kalman_update.hpp: Joseph form, chi-square gate, NIS).
 // Initialisation (docs/localization-filter.md §2): the heading is not observable from one GNSS fix,
-// so the filter waits until the antenna has moved heading_baseline_m from the first fix and takes
+// so the filter waits until the antenna has moved heading_baseline_m (and at least 10 fix sigmas)
+// from the first fix and takes
 // the course of that displacement (corrected by the mean steering angle, reversed when the wheels
 // turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic messages
 // are not used here (the map-aided update is issue 5).
