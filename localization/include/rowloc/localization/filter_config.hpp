@@ -32,7 +32,7 @@ namespace rowloc::localization {
 
 struct ProcessNoise {
   double jerk_mps3_per_sqrt_hz = 2.0;
-  double yaw_acceleration_radps2_per_sqrt_hz = 1.0;
+  double yaw_acceleration_radps2_per_sqrt_hz = 0.3;
   double velocity_mps_per_sqrt_hz = 0.02;
   double steering_rate_radps_per_sqrt_hz = 0.5;
   double gyro_bias_radps_per_sqrt_hz = 2e-5;
@@ -45,7 +45,7 @@ struct SlipAwareOdometryConfig {
   double slip_gradient_initial_nm = 500.0;          ///< initial k_s (torque per unit slip), > 0
   double slip_gradient_sigma_nm = 250.0;            ///< its initial sigma
   double min_slip_gradient_nm = 1.0;                ///< k_s is clamped above max(this, |T| + this)
-  double rolling_radius_noise_m_per_sqrt_m = 1e-4;  ///< R_w random walk per sqrt(metre rolled)
+  double rolling_radius_noise_m_per_sqrt_m = 1e-5;  ///< R_w random walk per sqrt(metre rolled)
   double slip_gradient_noise_nm_per_sqrt_m = 5.0;   ///< k_s random walk per sqrt(metre rolled)
 };
 
