@@ -113,8 +113,13 @@ struct Converged {
   }
 };
 
-void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware) {
+void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware, bool steering = true) {
   Converged c(v, slip_aware);
+  if (!steering) {  // issue 4's cycle exactly: predict + GPS + IMU + wheels (steering angles then float)
+    for (auto& messages : c.lap) {
+      std::erase_if(messages, [](const loc::SensorMessage& m) { return std::holds_alternative<loc::SteeringMessage>(m); });
+    }
+  }
   if (c.accepted_fraction < 0.99) {
     state.SkipWithError(("only " + std::to_string(c.accepted_fraction) + " of the updates accepted").c_str());
     return;
@@ -139,6 +144,9 @@ void BM_CycleSwerveSlipAware(benchmark::State& state) { RunCycles(state, rowloc:
 void BM_Cycle4ws(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), false); }
 void BM_CycleDifferential(benchmark::State& state) { RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), false); }
 void BM_CycleTracked(benchmark::State& state) { RunCycles(state, rowloc::mapio::TrackedVehicleConfig(), false); }
+void BM_CycleSwerveWithoutSteeringMessage(benchmark::State& state) {
+  RunCycles(state, rowloc::mapio::AgrimaroSwerveConfig(), false, false);
+}
 
 /// x and P of the converged 18-state swerve filter.
 struct Snapshot {
@@ -207,6 +215,7 @@ BENCHMARK(BM_CycleSwerveSlipAware);
 BENCHMARK(BM_Cycle4ws);
 BENCHMARK(BM_CycleDifferential);
 BENCHMARK(BM_CycleTracked);
+BENCHMARK(BM_CycleSwerveWithoutSteeringMessage);
 BENCHMARK(BM_RestoreStateAndCovariance);
 BENCHMARK(BM_PredictStep);
 BENCHMARK(BM_KalmanUpdate2d);

@@ -31,9 +31,10 @@ namespace {
 /// M H^T for a square M (n x n) and a sparse H (m x n): column i is sum_j H(i, j) M.col(j).
 /// Plain loops on contiguous columns (column-major storage): for these sizes Eigen's expression
 /// set-up per column costs more than the arithmetic, and the compiler vectorizes the inner loops.
-Eigen::MatrixXd TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h) {
+template <typename Tall>
+Tall TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h) {
   const Eigen::Index n = m.rows();
-  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(n, h.rows());
+  Tall out = Tall::Zero(n, h.rows());
   for (Eigen::Index i = 0; i < h.rows(); ++i) {
     double* target = out.col(i).data();
     for (Eigen::Index j = 0; j < h.cols(); ++j) {
@@ -48,7 +49,8 @@ Eigen::MatrixXd TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd&
 
 /// p <- p - u v^T on the upper triangle (row <= col), then the lower triangle mirrored from it:
 /// for a symmetric result, exactly symmetric, at half the cost.
-void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Eigen::MatrixXd& u, const Eigen::MatrixXd& v) {
+template <typename Wide>
+void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Wide& u, const Wide& v) {
   const Eigen::Index n = p.rows();
   for (Eigen::Index col = 0; col < n; ++col) {
     double* target = p.col(col).data();
@@ -62,6 +64,55 @@ void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Eigen::MatrixXd& u, const
     for (Eigen::Index row = col + 1; row < n; ++row) p(row, col) = p(col, row);
   }
 }
+
+/// The update with temporaries of type Tall (n x m), Wide (n x 2m) and Square (m x m): bounded
+/// fixed-capacity (stack) matrices for the usual sizes, dynamic ones beyond them.
+template <typename Tall, typename Wide, typename Square>
+UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Eigen::VectorXd& innovation,
+                         const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate_threshold,
+                         int angle_index) {
+  const Eigen::Index n = state.size();
+  const Eigen::Index m = innovation.size();
+  UpdateOutcome outcome;
+  outcome.innovation = innovation;
+  // Small matrices (n <= ~25, m <= 4) and a sparse H: every product below is written as m column
+  // operations (axpy / rank-1 updates on contiguous columns of the column-major P) so that it costs
+  // O(nnz(H) n + m n^2) without Eigen's GEMM packing (docs/benchmarks.md, "Vehicle EKF").
+  const Tall pht = TimesTransposed<Tall>(covariance, jacobian);  // P H^T (n x m)
+  Square s = noise;
+  s.noalias() += jacobian.lazyProduct(pht);                             // m x m, tiny
+  s = (0.5 * (s + s.transpose())).eval();
+  outcome.innovation_covariance = s;
+  const Eigen::LLT<Square> s_factor(s);
+  if (s_factor.info() != Eigen::Success) {
+    outcome.nis = std::numeric_limits<double>::infinity();
+    return outcome;  // S not positive definite (R must be): never apply such an update
+  }
+  outcome.nis = innovation.dot(s_factor.solve(innovation));
+  if (!(outcome.nis <= gate_threshold)) return outcome;
+  // K = P H^T S^-1, solved as (S^-1 (P H^T)^T)^T (S symmetric).
+  const Tall gain = s_factor.solve(pht.transpose()).transpose();  // n x m
+  state.noalias() += gain.lazyProduct(innovation);
+  if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
+  // Joseph form in one pass: with U = P H^T and A = P - K U^T, A H^T = U - K (S - R), so
+  //   (I - K H) P (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T
+  //                                     = P - K U^T - (U - K S) K^T = P - [K, U - K S] [U, K]^T
+  // for any gain K (the Joseph form's property; with the exact K = U S^-1 the second block vanishes
+  // and only its round-off remains). A rank-2m update of which only the upper triangle is computed.
+  const Eigen::Index m2 = 2 * m;
+  Wide left(n, m2), right(n, m2);
+  left.leftCols(m) = gain;
+  left.rightCols(m) = pht - gain.lazyProduct(s);
+  right.leftCols(m) = pht;
+  right.rightCols(m) = gain;
+  SubtractUpperRankUpdate(covariance, left, right);
+  outcome.accepted = true;
+  return outcome;
+}
+
+/// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 21).
+constexpr int kStackStates = 32;
+constexpr int kStackMeasurements = 8;
 
 }  // namespace
 
@@ -79,40 +130,14 @@ UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
   if (!innovation.allFinite() || !jacobian.allFinite() || !noise.allFinite()) {
     throw std::invalid_argument("Kalman update: non-finite innovation, Jacobian or noise");
   }
-  UpdateOutcome outcome;
-  outcome.innovation = innovation;
-  // Small matrices (n <= ~25, m <= 4) and a sparse H: every product below is written as m column
-  // operations (axpy / rank-1 updates on contiguous columns of the column-major P) so that it costs
-  // O(nnz(H) n + m n^2) without Eigen's GEMM packing (docs/benchmarks.md, "Vehicle EKF").
-  const Eigen::MatrixXd pht = TimesTransposed(covariance, jacobian);  // P H^T (n x m)
-  outcome.innovation_covariance = noise;
-  outcome.innovation_covariance.noalias() += jacobian * pht;          // m x m, tiny
-  outcome.innovation_covariance = 0.5 * (outcome.innovation_covariance + outcome.innovation_covariance.transpose());
-  const Eigen::LLT<Eigen::MatrixXd> s_factor(outcome.innovation_covariance);
-  if (s_factor.info() != Eigen::Success) {
-    outcome.nis = std::numeric_limits<double>::infinity();
-    return outcome;  // S not positive definite (R must be): never apply such an update
+  if (n <= kStackStates && m <= kStackMeasurements) {
+    using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;
+    using Wide = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, 2 * kStackMeasurements>;
+    using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackMeasurements, kStackMeasurements>;
+    return UpdateWith<Tall, Wide, Square>(state, covariance, innovation, jacobian, noise, gate_threshold, angle_index);
   }
-  outcome.nis = innovation.dot(s_factor.solve(innovation));
-  if (!(outcome.nis <= gate_threshold)) return outcome;
-  // K = P H^T S^-1, solved as (S^-1 (P H^T)^T)^T (S symmetric).
-  const Eigen::MatrixXd gain = s_factor.solve(pht.transpose()).transpose();  // n x m
-  state += gain * innovation;
-  if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
-  // Joseph form in one pass: with U = P H^T and A = P - K U^T, A H^T = U - K (S - R), so
-  //   (I - K H) P (I - K H)^T + K R K^T = A - (A H^T) K^T + K R K^T
-  //                                     = P - K U^T - (U - K S) K^T = P - [K, U - K S] [U, K]^T
-  // for any gain K (the Joseph form's property; with the exact K = U S^-1 the second block vanishes
-  // and only its round-off remains). A rank-2m update of which only the upper triangle is computed.
-  const Eigen::Index m2 = 2 * m;
-  Eigen::MatrixXd left(n, m2), right(n, m2);
-  left.leftCols(m) = gain;
-  left.rightCols(m) = pht - gain * outcome.innovation_covariance;
-  right.leftCols(m) = pht;
-  right.rightCols(m) = gain;
-  SubtractUpperRankUpdate(covariance, left, right);
-  outcome.accepted = true;
-  return outcome;
+  return UpdateWith<Eigen::MatrixXd, Eigen::MatrixXd, Eigen::MatrixXd>(state, covariance, innovation, jacobian, noise,
+                                                                       gate_threshold, angle_index);
 }
 
 }  // namespace rowloc::localization
