@@ -1,5 +1,5 @@
 // Measurement models of the vehicle EKF: predicted measurement h(x) and its Jacobian H = dh/dx,
-// analytic, tested against central differences (SPEC §6 "Sensors"; seed 000 ch. 6; seed 004 §3).
+// analytic, tested against central differences (SPEC §6 "Sensors"; seed 000 ch. 6; seed 004 eqs. (32)-(38)).
 // x is laid out by StateLayout; R(phi) is the planar rotation by the heading; l a lever arm
 // (body frame, metres); r the yaw rate.
 //
@@ -12,7 +12,7 @@
 //   v_i   = cos(delta_i) (vx - r l_iy) + sin(delta_i) (vy + r l_ix)   (wheel-centre velocity along
 //                                                                       the wheel heading)
 //   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
-//   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eq. (18):
+//   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eqs. (32)-(37):
 //           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque)
 // Non-holonomic constraint of wheel i (a pseudo-measurement z = 0: wheels and tracks do not slide
 // sideways, up to a side-slip noise; it is what makes the heading observable from GNSS positions):

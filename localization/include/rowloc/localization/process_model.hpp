@@ -14,7 +14,7 @@
 // explicit Euler for the velocities, and the mid-step heading phi + r dt / 2 for the position (exact
 // for a constant-speed arc to O(dt^3)). F = df/dx is analytic (tested against central differences).
 // Process noise: Q = diag(q_v^2, q_v^2, q_r^2, q_a^2, q_a^2, q_b^2, q_delta^2 ...) dt on
-// (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states of seed 004 (§3.2) a variance
+// (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states of seed 004 (text after eq. (41)) a variance
 // growing with the distance d_i = |v_i| dt wheel i rolled in the step: q_R^2 d_i, q_k^2 d_i.
 // Since F is the identity outside the 9 base states, P <- F P F^T + Q costs O(9^2 n).
 #pragma once
