@@ -20,14 +20,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <filesystem>
 #include <limits>
 #include <fstream>
 #include <map>
-#include <optional>
-#include <variant>
 #include <memory>
+#include <optional>
 #include <string>
+#include <variant>
 
 namespace rowloc::apps {
 namespace {
@@ -63,14 +64,21 @@ class TrackSlipTap {
   }
   bool active() const { return observer_.has_value(); }
 
-  void Observe(const localization::VehicleEkf& ekf, const localization::SensorMessage& message) {
-    if (!observer_ || !ekf.initialised() || !std::holds_alternative<localization::WheelsMessage>(message)) return;
-    const std::vector<double> speeds = ekf.last_wheel_speeds_radps();
+  /// False (with the reason in `error`) when the observer refused the input; it is then unchanged.
+  bool Observe(const localization::VehicleEkf& ekf, const localization::SensorMessage& message, std::string& error) {
+    if (!observer_ || !ekf.initialised() || !std::holds_alternative<localization::WheelsMessage>(message)) return true;
+    const std::vector<double>& speeds = ekf.last_wheel_speeds_radps();
     const auto& wheels = ekf.vehicle().wheels;
     const std::size_t left = 1 - right_;
     const Eigen::VectorXd& x = ekf.state();
-    observer_->Update({ekf.time_s(), x(0), x(1), x(2), speeds[right_] * wheels[right_].nominal_radius_m,
-                       speeds[left] * wheels[left].nominal_radius_m});
+    try {
+      observer_->Update({ekf.time_s(), x(0), x(1), x(2), speeds[right_] * wheels[right_].nominal_radius_m,
+                         speeds[left] * wheels[left].nominal_radius_m});
+    } catch (const std::invalid_argument& e) {
+      error = e.what();
+      return false;
+    }
+    return true;
   }
 
   /// Track slip i = 1 - eta per track name, once the observer runs.
@@ -142,7 +150,10 @@ void RunReplay(const ReplayOptions& o) {
       continue;
     }
     if (result.notice) spdlog::info("{}:{}: {}", o.log_path, reader.line_number(), *result.notice);
-    tracks.Observe(ekf, *message);
+    if (std::string error; !tracks.Observe(ekf, *message, error)) {
+      ++input_errors;
+      spdlog::warn("{}:{}: track-slip observer rejected the input: {}", o.log_path, reader.line_number(), error);
+    }
     WriteUpdates(result, writer, !o.no_updates, counts);
     if (ekf.initialised() && ekf.time_s() >= next_output_s) {
       writer.Write(EstimateOf(ekf, tracks));
