@@ -1,5 +1,6 @@
 // Tests of the NDJSON writers of docs/protocol.md (sim/log_writers.hpp).
 #include "rowloc/sim/log_writers.hpp"
+#include "rowloc/sim/trajectory_streams.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -213,6 +214,67 @@ TEST(EstimateLogWriter, RefusesAsymmetricNonFiniteOrIndefiniteCovariance) {
   // Semi-definite (a zero heading variance) is accepted.
   r.covariance = Eigen::Vector3d(1.0, 1.0, 0.0).asDiagonal().toDenseMatrix();
   EXPECT_NO_THROW(writer.Write(r));
+}
+
+TEST(EstimateLogWriter, SlipAndUpdateLinesRoundTripThroughTheReader) {
+  std::ostringstream out;
+  EstimateLogWriter writer(out, "test", "diff", geometry::GeoOrigin{});
+  UpdateLogRecord u;
+  u.time_s = 0.5;
+  u.sensor = "gnss";
+  u.innovation = Eigen::Vector2d(0.01, -0.02);
+  u.innovation_covariance = Eigen::Matrix2d::Identity() * 1e-4;
+  u.nis = u.innovation.squaredNorm() / 1e-4;  // S = 1e-4 I
+  u.accepted = true;
+  writer.WriteUpdate(u);
+  EstimateRecord r;
+  r.time_s = 0.5;
+  r.position_m = Eigen::Vector2d(1.0, 2.0);
+  r.slip = {{"left", 0.125}, {"right", -0.05}};
+  writer.Write(r);
+  std::istringstream in(out.str());
+  const EstimateStream stream = ParseEstimateStream(in, "written");
+  ASSERT_EQ(stream.updates.size(), 1u);
+  EXPECT_EQ(stream.updates[0].sensor, "gnss");
+  EXPECT_EQ(stream.updates[0].innovation, u.innovation);
+  EXPECT_DOUBLE_EQ(stream.updates[0].nis, u.nis);
+  ASSERT_EQ(stream.estimates.size(), 1u);
+  EXPECT_DOUBLE_EQ(stream.estimates[0].wheel_slip.at("left"), 0.125);
+  EXPECT_DOUBLE_EQ(stream.estimates[0].wheel_slip.at("right"), -0.05);
+}
+
+TEST(EstimateLogWriter, RefusesBadUpdatesAndSlipAndWritesNothingForThem) {
+  std::ostringstream out;
+  EstimateLogWriter writer(out, "test", "diff", geometry::GeoOrigin{});
+  UpdateLogRecord u;
+  u.time_s = 1.0;
+  u.sensor = "imu";
+  u.innovation = Eigen::Vector3d(0.1, 0.0, 0.0);
+  u.innovation_covariance = Eigen::Matrix3d::Identity();
+  u.nis = 0.01;
+  const std::string header = out.str();
+  UpdateLogRecord bad = u;
+  bad.sensor.clear();
+  EXPECT_THROW(writer.WriteUpdate(bad), std::invalid_argument);
+  bad = u;
+  bad.innovation_covariance = Eigen::Matrix2d::Identity();  // 3-vector, 2x2 S
+  EXPECT_THROW(writer.WriteUpdate(bad), std::invalid_argument);
+  bad = u;
+  bad.innovation(1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(writer.WriteUpdate(bad), std::invalid_argument);
+  bad = u;
+  bad.nis = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(writer.WriteUpdate(bad), std::invalid_argument);
+  EstimateRecord r;
+  r.time_s = 1.0;
+  r.slip = {{"left", 0.1}, {"left", 0.2}};
+  EXPECT_THROW(writer.Write(r), std::invalid_argument);
+  r.slip = {{"left", std::numeric_limits<double>::quiet_NaN()}};
+  EXPECT_THROW(writer.Write(r), std::invalid_argument);
+  EXPECT_EQ(out.str(), header);
+  writer.WriteUpdate(u);
+  u.time_s = 0.5;  // time going backwards
+  EXPECT_THROW(writer.WriteUpdate(u), std::invalid_argument);
 }
 
 }  // namespace
