@@ -17,6 +17,21 @@ double SteeringAngle(const Eigen::VectorXd& x, const StateLayout& layout, std::s
   return layout.steering[i] >= 0 ? x(layout.steering[i]) : 0.0;
 }
 
+/// Wheel i's centre velocity (vx - r l_y, vy + r l_x) in the body frame and the cos/sin of its
+/// steering angle: what the wheel-speed and non-holonomic models (and their Jacobians) share.
+struct WheelCentre {
+  double c, s, along_x, along_y;
+  double longitudinal() const { return c * along_x + s * along_y; }
+  double lateral() const { return -s * along_x + c * along_y; }
+};
+
+WheelCentre CentreOf(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
+                     std::size_t i) {
+  const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
+  const double r = x(L::kYawRate), delta = SteeringAngle(x, layout, i);
+  return {std::cos(delta), std::sin(delta), x(L::kVx) - r * l.y(), x(L::kVy) + r * l.x()};
+}
+
 }  // namespace
 
 LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
@@ -45,10 +60,7 @@ LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& 
 
 double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                  const StateLayout& layout, std::size_t i) {
-  const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
-  const double r = x(L::kYawRate);
-  const double delta = SteeringAngle(x, layout, i);
-  return std::cos(delta) * (x(L::kVx) - r * l.y()) + std::sin(delta) * (x(L::kVy) + r * l.x());
+  return CentreOf(x, vehicle, layout, i).longitudinal();
 }
 
 double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
@@ -62,14 +74,12 @@ LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::Veh
   const std::size_t n = vehicle.wheels.size();
   if (torque_nm && torque_nm->size() != n) throw std::invalid_argument("wheel model: one torque per wheel");
   LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
-  const double r = x(L::kYawRate);
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
-    const double delta = SteeringAngle(x, layout, i);
-    const double c = std::cos(delta), s = std::sin(delta);
-    const double along_x = x(L::kVx) - r * l.y(), along_y = x(L::kVy) + r * l.x();
-    const double v = c * along_x + s * along_y;
+    const WheelCentre w = CentreOf(x, vehicle, layout, i);
+    const double c = w.c, s = w.s;
+    const double v = w.longitudinal();
     const double radius = WheelRollingRadius(x, vehicle, layout, i);
     double gain = 1.0;  // k / (k - T)
     if (layout.slip_aware()) {
@@ -84,7 +94,7 @@ LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::Veh
     m.jacobian(row, L::kVx) = dv * c;
     m.jacobian(row, L::kVy) = dv * s;
     m.jacobian(row, L::kYawRate) = dv * (-c * l.y() + s * l.x());
-    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = dv * (-s * along_x + c * along_y);
+    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = dv * w.lateral();  // d v / d delta
   }
   return m;
 }
@@ -93,18 +103,16 @@ LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const 
                                                 const StateLayout& layout) {
   const std::size_t n = vehicle.wheels.size();
   LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
-  const double r = x(L::kYawRate);
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
-    const double delta = SteeringAngle(x, layout, i);
-    const double c = std::cos(delta), s = std::sin(delta);
-    const double along_x = x(L::kVx) - r * l.y(), along_y = x(L::kVy) + r * l.x();
-    m.predicted(row) = -s * along_x + c * along_y;
+    const WheelCentre w = CentreOf(x, vehicle, layout, i);
+    const double c = w.c, s = w.s;
+    m.predicted(row) = w.lateral();
     m.jacobian(row, L::kVx) = -s;
     m.jacobian(row, L::kVy) = c;
     m.jacobian(row, L::kYawRate) = s * l.y() + c * l.x();
-    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = -c * along_x - s * along_y;
+    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = -w.longitudinal();  // d lateral / d delta
   }
   return m;
 }
