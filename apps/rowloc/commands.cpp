@@ -1,6 +1,19 @@
 #include "commands.hpp"
 
+#include <spdlog/spdlog.h>
+
+#include <exception>
+
 namespace rowloc::apps {
+
+void RunReportingInputErrors(std::string_view command, const std::function<void()>& body) {
+  try {
+    body();
+  } catch (const std::exception& e) {
+    spdlog::error("{}: {}", command, e.what());
+    throw CLI::RuntimeError(kInputErrorExitCode);
+  }
+}
 
 void RegisterCommands(CLI::App& app) {
   RegisterExampleCommand(app);

@@ -3,7 +3,17 @@
 
 #include <CLI/CLI.hpp>
 
+#include <functional>
+#include <string_view>
+
 namespace rowloc::apps {
+
+/// Exit status of a subcommand whose input (files, options, data) is unusable.
+inline constexpr int kInputErrorExitCode = 2;
+
+/// Runs a subcommand's body; an exception is logged as "<command>: <what>" and ends the program
+/// with kInputErrorExitCode (the simulate, evaluate and replay commands share this contract).
+void RunReportingInputErrors(std::string_view command, const std::function<void()>& body);
 
 /// Adds every subcommand to the application.
 void RegisterCommands(CLI::App& app);

@@ -22,8 +22,6 @@
 namespace rowloc::apps {
 namespace {
 
-constexpr int kInputErrorExitCode = 2;
-
 struct EvaluateOptions {
   std::string truth_path;
   std::string estimates_path;
@@ -115,14 +113,7 @@ void RegisterEvaluateCommand(CLI::App& app) {
   cmd->add_flag("--clip-to-truth", o->clip_to_truth,
                 "Drop (and count) estimates outside the truth's time span instead of failing");
   cmd->add_flag("--json", o->json, "Print the JSON summary to stdout (logs go to stderr)");
-  cmd->callback([o] {
-    try {
-      RunEvaluate(*o);
-    } catch (const std::exception& e) {
-      spdlog::error("evaluate: {}", e.what());
-      throw CLI::RuntimeError(kInputErrorExitCode);
-    }
-  });
+  cmd->callback([o] { RunReportingInputErrors("evaluate", [&o] { RunEvaluate(*o); }); });
 }
 
 }  // namespace rowloc::apps

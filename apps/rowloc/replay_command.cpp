@@ -33,8 +33,6 @@
 namespace rowloc::apps {
 namespace {
 
-constexpr int kInputErrorExitCode = 2;
-
 struct ReplayOptions {
   std::string log_path;
   std::string vehicle_path;
@@ -188,14 +186,7 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");
   cmd->add_option("--skip", o->skip_types, "Message types not given to the filter (e.g. imu: odometry-only runs)")
       ->check(CLI::IsMember({"gps", "imu", "wheels", "steering", "ultrasonic", "vio"}));
-  cmd->callback([o] {
-    try {
-      RunReplay(*o);
-    } catch (const std::exception& e) {
-      spdlog::error("replay: {}", e.what());
-      throw CLI::RuntimeError(kInputErrorExitCode);
-    }
-  });
+  cmd->callback([o] { RunReportingInputErrors("replay", [&o] { RunReplay(*o); }); });
 }
 
 }  // namespace rowloc::apps

@@ -22,7 +22,6 @@
 namespace rowloc::apps {
 namespace {
 
-constexpr int kInputErrorExitCode = 2;
 /// Outline sampling tolerance of the written true row map (RowWorld::StepForTolerance).
 constexpr double kRowMapToleranceM = 1e-3;
 
@@ -98,14 +97,7 @@ void RegisterSimulateCommand(CLI::App& app) {
   cmd->add_option("--seed", o->seed, "Override the scenario's seed (Monte-Carlo runs)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--no-baselines", o->no_baselines, "Do not write the GNSS and odometry baseline estimates");
-  cmd->callback([o] {
-    try {
-      RunSimulate(*o);
-    } catch (const std::exception& e) {
-      spdlog::error("simulate: {}", e.what());
-      throw CLI::RuntimeError(kInputErrorExitCode);
-    }
-  });
+  cmd->callback([o] { RunReportingInputErrors("simulate", [&o] { RunSimulate(*o); }); });
 }
 
 }  // namespace rowloc::apps
