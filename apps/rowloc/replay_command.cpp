@@ -1,8 +1,9 @@
-// `rowloc replay LOG --vehicle CONFIG [--filter FILTER] -o ESTIMATES [--period S] [--no-updates]`:
-// runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log (docs/protocol.md
-// §1) and writes the estimate stream (§3): estimate lines with the (x, y, phi) covariance and the
-// per-wheel slip every --period seconds of log time (SAE slip from the filter; for skid-steer
-// vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one update line per measurement update.
+// `rowloc replay LOG --vehicle CONFIG [--filter FILTER] -o ESTIMATES [--period S] [--no-updates]
+//  [--skip TYPE ...]`: runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log
+// (docs/protocol.md §1) and writes the estimate stream (§3): estimate lines with the (x, y, phi)
+// covariance and the per-wheel slip every --period seconds of log time (SAE slip from the filter;
+// for skid-steer vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one
+// update line per measurement update. --skip withholds a message type (counted; ablation runs).
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.

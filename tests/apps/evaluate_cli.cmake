@@ -15,6 +15,11 @@ rowloc_cli_test(evaluate_names_malformed_line OFF "estimates_malformed.ndjson:4:
 rowloc_cli_test(evaluate_rejects_estimate_outside_truth OFF
                 "estimates_outside_truth.ndjson:37: estimate at time 25 s is outside the truth's span"
                 evaluate ${_eval_data}/truth.ndjson ${_eval_data}/estimates_outside_truth.ndjson -o ${_eval_out}/out)
+# --clip-to-truth drops that estimate, says so, and evaluates the rest.
+rowloc_cli_test(evaluate_clip_to_truth_drops_and_counts ON
+                "--clip-to-truth: 1 estimates and 0 updates outside the truth's span \\[0 s, 20 s\\] not evaluated.*position, total"
+                evaluate ${_eval_data}/truth.ndjson ${_eval_data}/estimates_outside_truth.ndjson --clip-to-truth
+                -o ${_eval_out}/clipped --no-plots)
 
 # Exit status and written files: a small checker script generated here (run_cli.cmake checks
 # only success/failure).

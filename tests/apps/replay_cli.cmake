@@ -30,3 +30,12 @@ rowloc_cli_test(replay_rejects_bad_filter OFF "bad-gate.json: gps.gate_probabili
                 --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/bad-gate.json -o ${_replay_out}/x.ndjson)
 rowloc_cli_test(replay_rejects_wrong_vehicle OFF "'left' is not a wheel of the vehicle 'agrimaro-swerve'|wheel order"
                 replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_swerve} -o ${_replay_out}/x.ndjson)
+# Ultrasonic pings are counted as read but unused (the map-aided update is issue 5); --skip drops a
+# message type (ablation runs) and counts it.
+rowloc_cli_test(replay_counts_unused_ultrasonic ON "22 ultrasonic pings read but not used"
+                replay ${_logs}/vineyard-002-1us-echoes.ndjson
+                --vehicle ${PROJECT_SOURCE_DIR}/config/vehicles/vineyard-ugv-4ws.json -o ${_replay_out}/pings.ndjson)
+rowloc_cli_test(replay_skip_counts_skipped_messages ON "143 messages skipped \\(--skip imu\\)"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve} --skip imu -o ${_replay_out}/skip.ndjson)
+rowloc_cli_test(replay_rejects_unknown_skip_type OFF "--skip"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve} --skip lidar -o ${_replay_out}/x.ndjson)
