@@ -1,9 +1,11 @@
-// `rowloc replay LOG --vehicle CONFIG [--filter FILTER] -o ESTIMATES [--period S] [--no-updates]
-//  [--skip TYPE ...]`: runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log
+// `rowloc replay LOG --vehicle CONFIG [--filter FILTER] [--map ROWMAP] -o ESTIMATES [--period S]
+//  [--no-updates] [--skip TYPE ...]`: runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log
 // (docs/protocol.md §1) and writes the estimate stream (§3): estimate lines with the (x, y, phi)
 // covariance and the per-wheel slip every --period seconds of log time (SAE slip from the filter;
 // for skid-steer vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one
-// update line per measurement update. --skip withholds a message type (counted; ablation runs).
+// update line per measurement update. With --map (a GeoJSON row map, docs/map-format.md) the
+// ultrasonic echoes update the filter against the rows (map-aided update, issue 5; the method is the
+// filter file's map_aided.method) and the summary counts what happened to every echo. --skip withholds a message type (counted; ablation runs).
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -13,6 +15,7 @@
 #include "rowloc/localization/sensor_log_reader.hpp"
 #include "rowloc/localization/track_slip_observer.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
+#include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
 
@@ -38,6 +41,7 @@ struct ReplayOptions {
   std::string log_path;
   std::string vehicle_path;
   std::string filter_path;
+  std::string map_path;
   std::string output_path;
   double period_s = 0.1;
   bool no_updates = false;
@@ -125,6 +129,13 @@ void RunReplay(const ReplayOptions& o) {
   if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log");
   localization::SensorLogReader reader(log, o.log_path);
   localization::VehicleEkf ekf(vehicle, config, reader.header().origin, reader.header().wheels);
+  if (!o.map_path.empty()) {
+    try {
+      ekf.AttachRowMap(mapio::ReadRowMapGeoJson(o.map_path));
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(o.map_path + ": " + e.what());
+    }
+  }
   std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error(o.output_path + ": cannot open for writing");
   sim::EstimateLogWriter writer(out, "rowloc replay", vehicle.name, reader.header().origin);
@@ -161,8 +172,15 @@ void RunReplay(const ReplayOptions& o) {
     }
   }
   spdlog::info("{} messages, {} estimates, {} rejected inputs", reader.messages_read(), estimates, input_errors);
-  if (ultrasonic > 0) {
-    spdlog::info("{} ultrasonic pings read but not used (the map-aided update is not in this filter yet)", ultrasonic);
+  if (ultrasonic > 0 && !ekf.has_row_map()) {
+    spdlog::info("{} ultrasonic pings read but not used (no row map: --map)", ultrasonic);
+  }
+  if (ekf.has_row_map()) {
+    const localization::MapAidedStats& s = ekf.map_aided_stats();
+    spdlog::info("map-aided ({}): {} echoes; {} without a row segment in the cone, {} with several candidates, "
+                 "{} contradicting, {} uninformative, {} degenerate",
+                 localization::MapAidedMethodName(config.map_aided.method), s.echoes, s.no_segment, s.ambiguous,
+                 s.contradicting, s.uninformative, s.degenerate);
   }
   if (skipped > 0) spdlog::info("{} messages skipped (--skip {})", skipped, fmt::join(o.skip_types, ","));
   for (const auto& [sensor, c] : counts) {
@@ -182,6 +200,7 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_option("--vehicle", o->vehicle_path, "Vehicle file (config/vehicles/*.json)")->required();
   cmd->add_option("--filter", o->filter_path, "Filter file (config/filters/*.json); default: built-in defaults "
                                               "(= config/filters/default.json)");
+  cmd->add_option("--map", o->map_path, "Row map (GeoJSON): use the ultrasonic echoes against its rows");
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <vector>
 
@@ -65,6 +66,11 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"steering.gate_probability", c.steering.gate_probability, true},
       {"vio.sigma_scale", c.vio.sigma_scale},
       {"vio.gate_probability", c.vio.gate_probability, true},
+      {"map_aided.range_sigma_m", c.map_aided.range_sigma_m},
+      {"map_aided.cone_half_angle_rad", c.map_aided.cone_half_angle_rad},
+      {"map_aided.max_range_m", c.map_aided.max_range_m},
+      {"map_aided.k_sigma", c.map_aided.k_sigma},
+      {"map_aided.gate_probability", c.map_aided.gate_probability, true},
       {"max_prediction_step_s", c.max_prediction_step_s},
       {"max_prediction_gap_s", c.max_prediction_gap_s},
   };
@@ -125,6 +131,15 @@ FilterConfig ReadConfig(Reader& root) {
     c.vio = {v.Vector<2>("position_m"), v.Number("sigma_scale"), v.Number("gate_probability")};
     v.RejectUnknownKeys();
   }
+  {
+    Reader a = root.Object("map_aided");
+    const std::string method = a.String("method");
+    const auto parsed = MapAidedMethodFromName(method);
+    if (!parsed) a.Fail(a.Key("method"), "must be \"range\", \"ellipsoid_cut\" or \"ellipsoid_cut_deprior\", got \"" + method + "\"");
+    c.map_aided = {*parsed, a.Number("range_sigma_m"), a.Number("cone_half_angle_rad"), a.Number("max_range_m"),
+                   a.Number("k_sigma"), a.Number("gate_probability")};
+    a.RejectUnknownKeys();
+  }
   c.max_prediction_step_s = root.Number("max_prediction_step_s");
   c.max_prediction_gap_s = root.Number("max_prediction_gap_s");
   root.RejectUnknownKeys();
@@ -140,8 +155,28 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
     if (!rule.probability && !IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
+  if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {
+    return std::string("map_aided.cone_half_angle_rad must be < pi/2");
+  }
   if (config.max_prediction_gap_s < config.max_prediction_step_s) {
     return std::string("max_prediction_gap_s must be >= max_prediction_step_s");
+  }
+  return std::nullopt;
+}
+
+std::string_view MapAidedMethodName(MapAidedMethod method) {
+  switch (method) {
+    case MapAidedMethod::kRange: return "range";
+    case MapAidedMethod::kEllipsoidCut: return "ellipsoid_cut";
+    case MapAidedMethod::kEllipsoidCutDeprior: return "ellipsoid_cut_deprior";
+  }
+  return "?";
+}
+
+std::optional<MapAidedMethod> MapAidedMethodFromName(std::string_view name) {
+  for (const MapAidedMethod m :
+       {MapAidedMethod::kRange, MapAidedMethod::kEllipsoidCut, MapAidedMethod::kEllipsoidCutDeprior}) {
+    if (MapAidedMethodName(m) == name) return m;
   }
   return std::nullopt;
 }

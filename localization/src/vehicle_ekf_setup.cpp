@@ -84,8 +84,12 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     RequireFinite(message, vio->velocity_x_mps, "velocity_x_mps");
     RequireFinite(message, vio->velocity_y_mps, "velocity_y_mps");
     RequireSigma(message, vio->sigma_mps, "sigma_mps");
-  } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message); ping && ping->range_m) {
-    RequirePositive(message, *ping->range_m, "range_m");
+  } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message)) {
+    if (ping->range_m) RequirePositive(message, *ping->range_m, "range_m");
+    const auto& mounts = vehicle_.ultrasonic;
+    const bool known = std::any_of(mounts.begin(), mounts.end(),
+                                   [&](const mapio::SensorMount& m) { return m.name == ping->sensor; });
+    if (ranging_ && !known) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
   }
 }
 

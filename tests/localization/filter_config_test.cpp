@@ -73,6 +73,12 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.vio.position_m, b.vio.position_m);
   EXPECT_EQ(a.vio.sigma_scale, b.vio.sigma_scale);
   EXPECT_EQ(a.vio.gate_probability, b.vio.gate_probability);
+  EXPECT_EQ(a.map_aided.method, b.map_aided.method);
+  EXPECT_EQ(a.map_aided.range_sigma_m, b.map_aided.range_sigma_m);
+  EXPECT_EQ(a.map_aided.cone_half_angle_rad, b.map_aided.cone_half_angle_rad);
+  EXPECT_EQ(a.map_aided.max_range_m, b.map_aided.max_range_m);
+  EXPECT_EQ(a.map_aided.k_sigma, b.map_aided.k_sigma);
+  EXPECT_EQ(a.map_aided.gate_probability, b.map_aided.gate_probability);
   EXPECT_EQ(a.max_prediction_step_s, b.max_prediction_step_s);
   EXPECT_EQ(a.max_prediction_gap_s, b.max_prediction_gap_s);
 }
@@ -135,14 +141,14 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 41u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 47u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
     EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: " + path + ": missing key"))) << path;
   }
   for (const char* section : {"process_noise", "slip_aware_odometry", "initialisation", "gps", "imu", "wheels",
-                              "steering", "vio"}) {
+                              "steering", "vio", "map_aided"}) {
     json edited = base;
     edited.erase(section);
     EXPECT_THAT(ErrorOf(edited), HasSubstr(std::string(section) + ": missing key")) << section;
@@ -215,6 +221,29 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
           << path << " = " << bad;
     }
   }
+}
+
+TEST(FilterConfig, MapAidedMethodNamesRoundTripAndUnknownOnesAreNamed) {
+  for (const MapAidedMethod m :
+       {MapAidedMethod::kRange, MapAidedMethod::kEllipsoidCut, MapAidedMethod::kEllipsoidCutDeprior}) {
+    EXPECT_EQ(MapAidedMethodFromName(MapAidedMethodName(m)), m);
+    json edited = DefaultJson();
+    edited["map_aided"]["method"] = std::string(MapAidedMethodName(m));
+    EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").map_aided.method, m);
+  }
+  EXPECT_EQ(MapAidedMethodFromName("ellipsoid"), std::nullopt);
+  json edited = DefaultJson();
+  edited["map_aided"]["method"] = "ellipsoid";
+  EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: map_aided.method: must be \"range\""),
+                                     HasSubstr("got \"ellipsoid\"")));
+}
+
+TEST(FilterConfig, ConeHalfAngleMustBeBelowAQuarterTurn) {
+  json edited = DefaultJson();
+  edited["map_aided"]["cone_half_angle_rad"] = 1.6;  // > pi/2
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: map_aided.cone_half_angle_rad must be < pi/2"));
+  edited["map_aided"]["cone_half_angle_rad"] = 1.5;
+  EXPECT_EQ(ErrorOf(edited), "");
 }
 
 TEST(FilterConfig, PredictionGapMustCoverTheStep) {

@@ -103,6 +103,33 @@ struct VioNoise {
   double gate_probability = 0.9999;
 };
 
+/// How an ultrasonic echo updates the filter against the row map (map_aided_ranging.hpp; issue 5;
+/// SPEC §6 "Map-aided ultrasonic measurement" step 5).
+enum class MapAidedMethod {
+  kRange,               ///< "range": EKF update of the measured range against the row line (consistent)
+  kEllipsoidCut,        ///< "ellipsoid_cut": seed 002: the cut ellipse as a position measurement
+                        ///< (built from the prior, so it counts the prior twice: overconfident)
+  kEllipsoidCutDeprior  ///< "ellipsoid_cut_deprior": the cut's information along the row normal
+                        ///< minus the prior's, as a scalar measurement (the prior counted once)
+};
+/// "range", "ellipsoid_cut" or "ellipsoid_cut_deprior".
+std::string_view MapAidedMethodName(MapAidedMethod method);
+/// Inverse of MapAidedMethodName; nullopt for an unknown name.
+std::optional<MapAidedMethod> MapAidedMethodFromName(std::string_view name);
+
+/// Ultrasonic ranges against the row map (used only when a row map is attached to the filter).
+/// The mounts (lever arm, beam direction) are the vehicle file's `ultrasonic` entries, by name.
+struct MapAidedConfig {
+  MapAidedMethod method = MapAidedMethod::kRange;
+  /// 1-sigma of a range against the map: echo noise plus the map's own error (canopy roughness,
+  /// polygon approximation of the outline), m.
+  double range_sigma_m = 0.003;
+  double cone_half_angle_rad = 0.1308996938995747;  ///< half aperture of the sound cone, in (0, pi/2)
+  double max_range_m = 4.0;                         ///< the sensor's range limit, m
+  double k_sigma = 3.0;  ///< slab d_m +- k sigma and k-sigma ellipse of the cut methods; candidate window
+  double gate_probability = 0.9999;
+};
+
 struct FilterConfig {
   std::string name = "default";
   ProcessNoise process_noise;
@@ -113,6 +140,7 @@ struct FilterConfig {
   WheelNoise wheels;
   SteeringNoise steering;
   VioNoise vio;
+  MapAidedConfig map_aided;
   double max_prediction_step_s = 0.02;  ///< longer predictions are split into steps of at most this
   double max_prediction_gap_s = 5.0;    ///< a longer gap between messages is an error (clock fault)
 };

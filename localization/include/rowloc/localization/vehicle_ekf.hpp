@@ -9,8 +9,9 @@
 // so the filter waits until the antenna has moved heading_baseline_m (and at least 10 fix sigmas)
 // from the first fix and takes
 // the course of that displacement (corrected by the mean steering angle, reversed when the wheels
-// turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic messages
-// are not used here (the map-aided update is issue 5).
+// turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic echoes are
+// used once a row map is attached (AttachRowMap; map_aided_ranging.hpp, issue 5): each echo is one
+// update named "ultrasonic" by the method of config.map_aided, against the segment it comes from.
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
 // max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4), a wheel count that does not match
@@ -24,6 +25,7 @@
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/kalman_update.hpp"
+#include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/sensor_messages.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/mapio/local_frame.hpp"
@@ -49,6 +51,16 @@ struct UpdateRecord {
   UpdateOutcome outcome;
 };
 
+/// What happened to the ultrasonic echoes offered to the map-aided update (the accepted and gated
+/// ones are in the update records); counts since construction.
+struct MapAidedStats {
+  std::size_t echoes = 0;         ///< echoes with a range while a map is attached and the filter runs
+  std::size_t no_segment = 0;     ///< no row segment inside the predicted cone within max_range_m
+  std::size_t ambiguous = 0;      ///< more than one candidate segment (a corner, or a prediction error)
+  std::size_t contradicting = 0;  ///< cut methods: the slab misses the k-sigma ellipse (reported, not clipped)
+  std::size_t uninformative = 0;  ///< cut methods: the slab holds the whole ellipse (nothing to update)
+  std::size_t degenerate = 0;     ///< no usable geometry (grazing beam, sensor on a vertex, degenerate slab)
+};
 struct ProcessResult {
   std::vector<UpdateRecord> updates;  ///< the updates made (none before initialisation)
   std::optional<std::string> notice;  ///< initialisation, re-initialisation after a gap
@@ -68,6 +80,13 @@ class VehicleEkf {
   /// Initialises (or overrides) the pose (x, y, phi) with its covariance at time_s; velocities and
   /// the other states keep their values (zero and the initial sigmas when not yet initialised).
   void SetPose(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance);
+  /// Uses ultrasonic echoes against this row map from now on (replacing any map attached before).
+  /// The map may be in another local frame: it is re-expressed in the filter's (RowMapRanging).
+  /// Throws std::invalid_argument for an invalid map (e.g. no rows), or when the vehicle has no
+  /// ultrasonic sensor.
+  void AttachRowMap(const geometry::RowMap& map);
+  bool has_row_map() const { return ranging_ != nullptr; }
+  const MapAidedStats& map_aided_stats() const { return map_aided_stats_; }
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
 
@@ -93,7 +112,7 @@ class VehicleEkf {
   ProcessResult Apply(const WheelsMessage& wheels);
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
-  ProcessResult Apply(const UltrasonicMessage&) { return {}; }
+  ProcessResult Apply(const UltrasonicMessage& ping);
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
@@ -120,6 +139,11 @@ class VehicleEkf {
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
   std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
   std::vector<std::optional<double>> last_steering_rad_;
+  geometry::GeoOrigin origin_;
+  std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
+  std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
+  double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
+  MapAidedStats map_aided_stats_;
 };
 
 }  // namespace rowloc::localization

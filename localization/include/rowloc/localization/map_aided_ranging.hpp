@@ -1,0 +1,102 @@
+// Map-aided ultrasonic measurement (issue 5; SPEC §6 "Map-aided ultrasonic measurement"; seed 002
+// ch. 2-5 with the errata of SPEC §10): which row segment an echo comes from, and the measurement
+// it gives the filter, by one of three methods (MapAidedMethod, filter_config.hpp).
+//
+// Echo model. A sensor at lever arm l (body frame) with beam direction b and a sound cone of half
+// aperture a sits at p_s = p + R(phi) l. Its echo comes from the nearest reflecting point of the
+// row outlines inside the cone (geometry/cone_cast.hpp), so against one segment with unit normal n
+// (towards the sensor) and line n^T x = c, with gamma the angle between the beam and -n:
+//   perpendicular (gamma <= a, foot of the perpendicular on the segment):  r = n^T p_s - c,
+//   cone edge (gamma > a, the edge ray e nearest the normal hits first):   r = (c - n^T p_s)/(n^T e),
+//   segment end q (the nearest point in the cone is a vertex):            r = |p_s - q|.
+// Each is smooth in (X, Y, phi) and its Jacobian is analytic (RangeToLineJacobian for the edge
+// ray); the case is decided at the predicted pose (tests compare with central differences).
+//
+// Segment selection (SPEC §6 step 2): a cone cast of every row segment from the predicted sensor
+// pose (SegmentIndex::ConeCastAll, R-tree); the first hit and every hit within a window of it are
+// candidates (a polygon corner gives two; a prediction error may put the true surface second); the
+// filter keeps the candidate with the smallest range NIS and gates it (chi-square, 1 dof).
+//
+// Methods (SPEC §6 steps 3-5):
+// - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2. The consistent method.
+// - ellipsoid_cut (seed 002 ch. 4): the slab d_m +- k sigma (range_slab.hpp: beam/normal angle,
+//   cone, lever arm) widened by k sigma_phi |d beta/d phi| for the heading uncertainty, cuts the
+//   k-sigma position ellipse E(p, k^2 P_pp) (geometry::ParallelCut); the new centre c+ is a
+//   position measurement with covariance P+/k^2 (H = [I 0]). Built from the prior, it counts the
+//   prior twice (the thesis's method, kept for comparison; overconfident by construction).
+// - ellipsoid_cut_deprior: the cut's variance along n, v+ = n^T P+ n / k^2, and mean m+ = n^T c+
+//   against the prior's v = n^T P_pp n, m = n^T p: the information the slab added is
+//   1/r = 1/v+ - 1/v, the equivalent scalar measurement z = r (m+/v+ - m/v) of n^T p with variance
+//   r (so that fusing it with the prior gives back m+, v+ along n): the prior counted once.
+// An empty slab ∩ ellipse is a contradicting echo: reported (CutStatus::kEmpty), never clipped.
+#pragma once
+
+#include "rowloc/geometry/ellipsoid_cuts.hpp"
+#include "rowloc/geometry/row_map.hpp"
+#include "rowloc/geometry/segment_index.hpp"
+#include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/range_to_line_model.hpp"
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+namespace rowloc::localization {
+
+/// Which point of a segment the echo comes from (at the predicted pose); see the header comment.
+enum class EchoGeometry { kPerpendicular, kConeEdge, kSegmentEnd };
+
+/// A row segment an echo may come from, with the range model linearized at the predicted pose.
+struct EchoCandidate {
+  std::size_t entry = 0;  ///< SegmentIndex entry (row and segment of the map)
+  EchoGeometry geometry = EchoGeometry::kPerpendicular;
+  double predicted_range_m = 0.0;
+  Eigen::RowVector3d jacobian = Eigen::RowVector3d::Zero();  ///< d r / d(X, Y, phi): (1, 1, m/rad)
+  /// The reflecting line, normal towards the sensor: the segment's line, or at a segment end the
+  /// line through the end perpendicular to the sensor direction (the slab of the cut methods).
+  EdgeLine edge;
+};
+
+/// The row map as reflecting segments in the filter's local frame, with its spatial index.
+class RowMapRanging {
+ public:
+  /// The map's rows are re-expressed from the map's origin to `filter_origin` through WGS84 when the
+  /// two differ (GeographicLib; heights taken as the origins'). Throws std::invalid_argument when
+  /// the map is invalid (geometry::ValidateRowMap: e.g. no rows) or an origin is out of range.
+  RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin);
+
+  const geometry::SegmentIndex& index() const { return index_; }
+
+  /// Segments a beam from `pose` (X, Y, phi) can hit within max_range_m, nearest first: the first
+  /// hit and every hit whose range is within window_m of it. Empty: the cone meets no segment.
+  /// Throws std::invalid_argument for a non-finite pose or bad cone parameters.
+  std::vector<EchoCandidate> Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
+                                        double max_range_m, double window_m) const;
+
+ private:
+  geometry::SegmentIndex index_;
+};
+
+/// The filter measurement of one echo, in the pose (X, Y, phi) of the state.
+struct MapAidedMeasurement {
+  Eigen::VectorXd innovation;                          ///< 1 row (range, deprior) or 2 (ellipsoid cut)
+  Eigen::Matrix<double, Eigen::Dynamic, 3> jacobian;   ///< d h / d(X, Y, phi)
+  Eigen::MatrixXd noise;                               ///< R
+  geometry::CutStatus cut_status = geometry::CutStatus::kUpdated;  ///< cut methods; kUpdated for range
+};
+
+/// Range NIS (y^2 / (H P H^T + sigma^2)) of a candidate for the measured range.
+double RangeNis(const EchoCandidate& candidate, double measured_range_m, const Eigen::Matrix3d& pose_covariance,
+                double range_sigma_m);
+
+/// The measurement of `config.method` for the chosen candidate. pose / pose_covariance: the
+/// predicted (X, Y, phi) and its covariance (positive definite). For the cut methods the result has
+/// no rows when the cut is not kUpdated (kEmpty: a contradicting echo; kUnchanged: no information;
+/// kInvalidInput: a degenerate slab) and cut_status says which.
+MapAidedMeasurement MakeMapAidedMeasurement(const EchoCandidate& candidate, const RangeSensorMount& mount,
+                                            const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
+                                            double measured_range_m, const MapAidedConfig& config);
+
+}  // namespace rowloc::localization

@@ -1,0 +1,63 @@
+// VehicleEkf: the map-aided ultrasonic update (issue 5; map_aided_ranging.hpp states the models).
+#include "rowloc/localization/vehicle_ekf.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace rowloc::localization {
+
+void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
+  if (vehicle_.ultrasonic.empty()) {
+    throw std::invalid_argument("row map: the vehicle '" + vehicle_.name + "' has no ultrasonic sensor to use it");
+  }
+  ranging_ = std::make_shared<const RowMapRanging>(map, origin_);
+}
+
+ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
+  ProcessResult result;
+  if (!ranging_ || !initialised_ || !ping.range_m) return result;  // no echo: no measurement
+  MapAidedStats& stats = map_aided_stats_;
+  ++stats.echoes;
+  const auto named = std::find_if(vehicle_.ultrasonic.begin(), vehicle_.ultrasonic.end(),
+                                  [&](const mapio::SensorMount& m) { return m.name == ping.sensor; });
+  const RangeSensorMount& mount = ultrasonic_mounts_[static_cast<std::size_t>(named - vehicle_.ultrasonic.begin())];
+  const MapAidedConfig& config = config_.map_aided;
+  const Eigen::Vector3d pose = x_.head<3>();
+  const Eigen::Matrix3d pose_covariance = p_.topLeftCorner<3, 3>();
+  // Candidates: every surface within k sigma (position and range) of the nearest predicted one.
+  const double window_m =
+      config.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config.range_sigma_m);
+  const std::vector<EchoCandidate> candidates = ranging_->Candidates(pose, mount, config.max_range_m, window_m);
+  if (candidates.empty()) {
+    ++stats.no_segment;
+    return result;
+  }
+  if (candidates.size() > 1) ++stats.ambiguous;
+  const EchoCandidate* best = nullptr;
+  double best_nis = std::numeric_limits<double>::infinity();
+  for (const EchoCandidate& c : candidates) {
+    const double nis = RangeNis(c, *ping.range_m, pose_covariance, config.range_sigma_m);
+    if (nis < best_nis || best == nullptr) {
+      best_nis = nis;
+      best = &c;
+    }
+  }
+  const MapAidedMeasurement m = MakeMapAidedMeasurement(*best, mount, pose, pose_covariance, *ping.range_m, config);
+  if (m.innovation.size() == 0) {
+    switch (m.cut_status) {
+      case geometry::CutStatus::kEmpty: ++stats.contradicting; break;
+      case geometry::CutStatus::kUnchanged: ++stats.uninformative; break;
+      default: ++stats.degenerate; break;
+    }
+    return result;
+  }
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(m.innovation.size(), x_.size());
+  jacobian.leftCols<3>() = m.jacobian;
+  const double gate = m.innovation.size() == 1 ? gate_map_aided_1_ : gate_map_aided_2_;
+  result.updates.push_back(Update(ping.time_s, "ultrasonic", m.innovation, jacobian, m.noise, gate));
+  return result;
+}
+
+}  // namespace rowloc::localization
