@@ -1,5 +1,6 @@
-// `rowloc map sample` (generate the synthetic sample row map) and `rowloc map info` (read,
-// validate and describe a row map file).
+// `rowloc map sample` (generate the synthetic sample row map), `rowloc map info` (read, validate
+// and describe a row map file) and `rowloc map edit` (a shifted map or one with rows removed: the
+// map errors of the map-aided robustness runs, docs/map-aided-update.md).
 #include "commands.hpp"
 
 #include "rowloc/geometry/row_map.hpp"
@@ -8,9 +9,12 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <limits>
 #include <memory>
+#include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rowloc::apps {
 namespace {
@@ -53,6 +57,32 @@ void RunInfo(const std::string& path) {
   }
 }
 
+struct EditOptions {
+  std::string input_path;
+  std::string output_path;
+  std::vector<double> shift_m;          ///< east, north in the map's local frame
+  std::vector<std::string> drop_rows;   ///< row ids to remove
+};
+
+void RunEdit(const EditOptions& o) {
+  geometry::RowMap map = mapio::ReadRowMapGeoJson(o.input_path);
+  for (const std::string& id : o.drop_rows) {
+    const auto it = std::find_if(map.rows.begin(), map.rows.end(), [&](const geometry::Row& r) { return r.id == id; });
+    if (it == map.rows.end()) throw std::runtime_error(o.input_path + ": no row '" + id + "' to drop");
+    map.rows.erase(it);
+  }
+  if (map.rows.empty()) throw std::runtime_error("every row dropped: an empty map is not a map");
+  if (!o.shift_m.empty()) {
+    const Eigen::Vector2d shift(o.shift_m[0], o.shift_m[1]);
+    if (!shift.allFinite()) throw std::runtime_error("--shift must be finite");
+    for (geometry::Row& row : map.rows) {
+      for (Eigen::Vector2d& p : row.points_m) p += shift;
+    }
+  }
+  mapio::WriteRowMapGeoJson(map, o.output_path);
+  spdlog::info("wrote {} rows ({} segments) to {}", map.rows.size(), map.SegmentCount(), o.output_path);
+}
+
 }  // namespace
 
 void RegisterMapCommands(CLI::App& app) {
@@ -78,6 +108,14 @@ void RegisterMapCommands(CLI::App& app) {
   CLI::App* info = map->add_subcommand("info", "Read, validate and describe a row map");
   info->add_option("file", *info_path, "GeoJSON row map")->required();
   info->callback([info_path] { RunInfo(*info_path); });
+
+  auto edit = std::make_shared<EditOptions>();
+  CLI::App* ed = map->add_subcommand("edit", "Write a shifted row map, or one with rows removed (map errors)");
+  ed->add_option("file", edit->input_path, "GeoJSON row map")->required();
+  ed->add_option("-o,--output", edit->output_path, "Output GeoJSON file")->required();
+  ed->add_option("--shift", edit->shift_m, "Shift every vertex by EAST NORTH metres (local frame)")->expected(2);
+  ed->add_option("--drop-row", edit->drop_rows, "Remove the row with this id (repeatable)");
+  ed->callback([edit] { RunReportingInputErrors("map edit", [&edit] { RunEdit(*edit); }); });
 }
 
 }  // namespace rowloc::apps

@@ -70,6 +70,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"map_aided.cone_half_angle_rad", c.map_aided.cone_half_angle_rad},
       {"map_aided.max_range_m", c.map_aided.max_range_m},
       {"map_aided.k_sigma", c.map_aided.k_sigma},
+      {"map_aided.row_smoothing_m", c.map_aided.row_smoothing_m},
       {"map_aided.gate_probability", c.map_aided.gate_probability, true},
       {"max_prediction_step_s", c.max_prediction_step_s},
       {"max_prediction_gap_s", c.max_prediction_gap_s},
@@ -137,7 +138,7 @@ FilterConfig ReadConfig(Reader& root) {
     const auto parsed = MapAidedMethodFromName(method);
     if (!parsed) a.Fail(a.Key("method"), "must be \"range\", \"ellipsoid_cut\" or \"ellipsoid_cut_deprior\", got \"" + method + "\"");
     c.map_aided = {*parsed, a.Number("range_sigma_m"), a.Number("cone_half_angle_rad"), a.Number("max_range_m"),
-                   a.Number("k_sigma"), a.Number("gate_probability")};
+                   a.Number("k_sigma"), a.Number("row_smoothing_m"), a.Number("gate_probability")};
     a.RejectUnknownKeys();
   }
   c.max_prediction_step_s = root.Number("max_prediction_step_s");

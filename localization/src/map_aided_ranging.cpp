@@ -46,51 +46,157 @@ Eigen::Vector2d RotatedLeverArmDerivative(const Eigen::Rotation2Dd& rotation, co
   return rotation * Eigen::Vector2d(-lever_arm.y(), lever_arm.x());
 }
 
+/// Arc-length parametrisation of one row's outline (closed: s wraps; open: s is clamped).
+class Outline {
+ public:
+  explicit Outline(const geometry::Row& row) : row_(row) {
+    arc_.push_back(0.0);
+    for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
+      const auto [a, b] = row.Segment(i);
+      arc_.push_back(arc_.back() + (b - a).norm());
+    }
+  }
+  double length() const { return arc_.back(); }
+  double VertexArc(std::size_t i) const { return arc_[i]; }
+  Eigen::Vector2d At(double s) const {
+    if (row_.closed) {
+      s = std::fmod(s, length());
+      if (s < 0.0) s += length();
+    } else {
+      s = std::clamp(s, 0.0, length());
+    }
+    const std::size_t i = std::min<std::size_t>(
+        static_cast<std::size_t>(std::upper_bound(arc_.begin(), arc_.end(), s) - arc_.begin()) - 1,
+        row_.SegmentCount() - 1);
+    const auto [a, b] = row_.Segment(i);
+    const double t = (s - arc_[i]) / (arc_[i + 1] - arc_[i]);
+    return a + std::clamp(t, 0.0, 1.0) * (b - a);
+  }
+
+ private:
+  const geometry::Row& row_;
+  std::vector<double> arc_;  ///< arc length at each vertex (and the total at the end)
+};
+
+/// A corner at the scale of the smoothing: chords of smoothing_m / 4 before and after the vertex
+/// turn by more than kCornerTurnRad (the ends of a canopy polygon; leaf roughness turns far less).
+/// The two ends of an open polyline are corners too (the end of a row is a point feature).
+constexpr double kCornerTurnRad = 0.7853981633974483;  // 45 degrees
+
+std::vector<bool> CornerFlags(const geometry::Row& row, const Outline& outline, double smoothing_m) {
+  const std::size_t n = row.points_m.size();
+  std::vector<bool> corner(n, false);
+  const double q = 0.25 * smoothing_m;
+  for (std::size_t k = 0; k < n; ++k) {
+    const double s = outline.VertexArc(k);
+    const Eigen::Vector2d before = outline.At(s) - outline.At(s - q);
+    const Eigen::Vector2d after = outline.At(s + q) - outline.At(s);
+    const double norms = before.norm() * after.norm();
+    corner[k] = norms > 0.0 && before.dot(after) < std::cos(kCornerTurnRad) * norms;
+  }
+  if (!row.closed) corner.front() = corner.back() = true;
+  return corner;
+}
+
+/// Unit chord of the outline over +-smoothing_m / 2 of arc length around `centre`, stopped at the
+/// corners on either side (a corner at `centre` itself does not stop it); `fallback` when the
+/// window is shorter than `min_length` or folds back.
+Eigen::Vector2d SmoothedTangent(const Outline& outline, const std::vector<double>& corner_arcs, double period,
+                                double centre, double smoothing_m, double min_length,
+                                const Eigen::Vector2d& fallback) {
+  double lo = centre - 0.5 * smoothing_m, hi = centre + 0.5 * smoothing_m;
+  for (const double corner : corner_arcs) {
+    for (const double c : {corner - period, corner, corner + period}) {
+      if (c < centre - 1e-9) lo = std::max(lo, c);
+      if (c > centre + 1e-9) hi = std::min(hi, c);
+    }
+  }
+  const Eigen::Vector2d chord = outline.At(hi) - outline.At(lo);
+  if (hi - lo < min_length || chord.norm() < 0.5 * (hi - lo)) return fallback;
+  return chord.normalized();
+}
+
+}  // namespace
+
+std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::RowMap& map, double smoothing_m) {
+  std::vector<EntryShape> shapes;
+  for (const geometry::Row& row : map.rows) {
+    const Outline outline(row);
+    const std::vector<bool> corner = CornerFlags(row, outline, smoothing_m);
+    std::vector<double> corner_arcs;
+    for (std::size_t k = 0; k < corner.size(); ++k) {
+      if (corner[k]) corner_arcs.push_back(outline.VertexArc(k));
+    }
+    const double period = row.closed ? outline.length() : 0.0;
+    const std::size_t n = row.points_m.size();
+    for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
+      const auto [a, b] = row.Segment(i);
+      const double length = (b - a).norm();
+      const Eigen::Vector2d own = (b - a) / length;
+      const double start = outline.VertexArc(i);
+      const auto tangent = [&](double centre, double min_length) {
+        return SmoothedTangent(outline, corner_arcs, period, centre, smoothing_m, min_length, own);
+      };
+      shapes.push_back(EntryShape{tangent(start + 0.5 * length, length), tangent(start, 0.0),
+                                  tangent(start + length, 0.0), corner[i], corner[(i + 1) % n]});
+    }
+  }
+  return shapes;
+}
+
+namespace {
+
+/// The range to the local straight row: the line with the row's (smoothed) normal n that lies at
+/// the cast range from the sensor; r = (n^T p_s - c) / cos(max(0, gamma - a)).
 std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, const geometry::Segment2& segment,
-                                       const Eigen::Vector3d& pose, const RangeSensorMount& mount) {
+                                       const RowMapRanging::EntryShape& shape, const Eigen::Vector3d& pose,
+                                       const RangeSensorMount& mount) {
   const Eigen::Rotation2Dd rotation(pose.z());
   const Eigen::Vector2d sensor = pose.head<2>() + rotation * mount.lever_arm_m;
   const Eigen::Vector2d axis = rotation * Eigen::Vector2d(std::cos(mount.beam_angle_rad), std::sin(mount.beam_angle_rad));
-  const Eigen::Vector2d d_sensor_d_phi = RotatedLeverArmDerivative(rotation, mount.lever_arm_m);
-  const Eigen::Vector2d& n = hit.hit.normal;  // unit, on the sensor's side
-  const double c = n.dot(segment.a);
-  EchoCandidate candidate;
-  candidate.entry = hit.entry;
-  candidate.edge = EdgeLine{n, c};
-
-  const double height = n.dot(sensor) - c;  // perpendicular distance of the sensor, >= 0
-  const Eigen::Vector2d foot = sensor - height * n;
-  const Eigen::Vector2d ab = segment.b - segment.a;
-  const double t = (foot - segment.a).dot(ab) / ab.squaredNorm();
-  const bool foot_on_segment = t >= 0.0 && t <= 1.0;
-  const bool foot_in_cone = -n.dot(axis) >= std::cos(mount.cone_half_angle_rad) - kConeTolerance;
-  if (foot_on_segment && foot_in_cone) {
-    candidate.geometry = EchoGeometry::kPerpendicular;
-    candidate.predicted_range_m = height;
-    candidate.jacobian << n.x(), n.y(), n.dot(d_sensor_d_phi);
-    return candidate;
-  }
-  if (hit.hit.segment_param <= kEndTolerance || hit.hit.segment_param >= 1.0 - kEndTolerance) {
-    const Eigen::Vector2d end = hit.hit.segment_param <= 0.5 ? segment.a : segment.b;
-    const Eigen::Vector2d offset = sensor - end;
+  const bool at_start = hit.hit.segment_param <= kEndTolerance;
+  const bool at_end = at_start || hit.hit.segment_param >= 1.0 - kEndTolerance;
+  if (at_end && (at_start ? shape.start_is_corner : shape.end_is_corner)) {
+    // A corner (row end, polygon end cap): the echo comes from that point, r = |p_s - q|.
+    const Eigen::Vector2d corner = at_start ? segment.a : segment.b;
+    const Eigen::Vector2d offset = sensor - corner;
     const double range = offset.norm();
-    if (!(range > 0.0)) return std::nullopt;  // the sensor on the vertex: no direction
+    if (!(range > 0.0)) return std::nullopt;  // the sensor on the corner: no direction
     const Eigen::Vector2d u = offset / range;
+    EchoCandidate candidate;
+    candidate.entry = hit.entry;
     candidate.geometry = EchoGeometry::kSegmentEnd;
     candidate.predicted_range_m = range;
-    candidate.jacobian << u.x(), u.y(), u.dot(d_sensor_d_phi);
-    candidate.edge = EdgeLine{u, u.dot(end)};
+    candidate.jacobian << u.x(), u.y(), u.dot(RotatedLeverArmDerivative(rotation, mount.lever_arm_m));
+    candidate.edge = EdgeLine{u, u.dot(corner)};
     return candidate;
   }
-  // The hit is on one of the two edge rays of the cone: the one closer to the hit direction.
-  const Eigen::Vector2d to_hit = hit.hit.point - sensor;
-  const double side = axis.x() * to_hit.y() - axis.y() * to_hit.x();  // > 0: counter-clockwise edge
+  const Eigen::Vector2d& row_tangent = !at_end ? shape.tangent : (at_start ? shape.start_tangent : shape.end_tangent);
+  Eigen::Vector2d n(-row_tangent.y(), row_tangent.x());
+  if (n.dot(hit.hit.normal) < 0.0) n = -n;  // towards the sensor
+  const double range = hit.hit.range_m;
+  const double cos_axis = -n.dot(axis);
+  if (!(cos_axis > kMinBeamIncidenceCosine) || !(range > 0.0)) return std::nullopt;  // grazing, or on the wall
+  const double gamma = std::acos(std::min(1.0, cos_axis));
+  const bool normal_in_cone = gamma <= mount.cone_half_angle_rad + kConeTolerance;
+  const double incidence_cos = std::cos(std::max(0.0, gamma - mount.cone_half_angle_rad));
+  EchoCandidate candidate;
+  candidate.entry = hit.entry;
+  candidate.predicted_range_m = range;
+  candidate.edge = EdgeLine{n, n.dot(sensor) - range * incidence_cos};
+  if (normal_in_cone) {
+    candidate.geometry = at_end ? EchoGeometry::kSegmentEnd : EchoGeometry::kPerpendicular;
+    candidate.jacobian << n.x(), n.y(), n.dot(RotatedLeverArmDerivative(rotation, mount.lever_arm_m));
+    return candidate;
+  }
+  // The nearest point is on the edge ray of the cone closer to the normal.
+  const Eigen::Vector2d to_normal = -n;
+  const double side = axis.x() * to_normal.y() - axis.y() * to_normal.x();  // > 0: counter-clockwise edge
   RangeSensorMount edge_ray = mount;
   edge_ray.beam_angle_rad = mount.beam_angle_rad + (side >= 0.0 ? 1.0 : -1.0) * mount.cone_half_angle_rad;
   const auto model = RangeToLineJacobian(pose, edge_ray, candidate.edge);
   if (!model) return std::nullopt;
-  candidate.geometry = EchoGeometry::kConeEdge;
-  candidate.predicted_range_m = model->range_m;
+  candidate.geometry = at_end ? EchoGeometry::kSegmentEnd : EchoGeometry::kConeEdge;
   candidate.jacobian = model->jacobian;
   return candidate;
 }
@@ -123,10 +229,21 @@ std::optional<RangeSlab> HeadingWidenedSlab(const EchoCandidate& candidate, cons
   return centre;
 }
 
+double CheckedSmoothing(double row_smoothing_m) {
+  if (!(std::isfinite(row_smoothing_m) && row_smoothing_m >= 0.0)) {
+    throw std::invalid_argument("RowMapRanging: row smoothing length must be finite and >= 0");
+  }
+  return row_smoothing_m;
+}
+
 }  // namespace
 
-RowMapRanging::RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin)
-    : index_(geometry::SegmentIndex::FromRowMap(InFilterFrame(map, filter_origin))) {}
+RowMapRanging::RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin,
+                             double row_smoothing_m)
+    : RowMapRanging(InFilterFrame(map, filter_origin), CheckedSmoothing(row_smoothing_m)) {}
+
+RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoothing_m)
+    : index_(geometry::SegmentIndex::FromRowMap(local_map)), shapes_(Shapes(local_map, row_smoothing_m)) {}
 
 std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
                                                      double max_range_m, double window_m) const {
@@ -136,9 +253,17 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
   const double beam = pose.z() + mount.beam_angle_rad;
   const geometry::Cone2 cone{pose.head<2>() + rotation * mount.lever_arm_m, Eigen::Vector2d(std::cos(beam), std::sin(beam)),
                              mount.cone_half_angle_rad, max_range_m};
-  const std::vector<geometry::SegmentIndex::Hit> hits = index_.ConeCastAll(cone);
   std::vector<EchoCandidate> candidates;
-  if (hits.empty()) return candidates;
+  // The nearest hit first (a cast that stops at the first surface), then every segment within the
+  // window behind it: a short sector, so the second query touches a few segments only.
+  const std::optional<geometry::SegmentIndex::Hit> first = index_.ConeCast(cone);
+  if (!first) return candidates;
+  std::vector<geometry::SegmentIndex::Hit> hits{*first};
+  if (window_m > 0.0) {
+    geometry::Cone2 behind = cone;
+    behind.max_range_m = std::min(max_range_m, first->hit.range_m + window_m);
+    hits = index_.ConeCastAll(behind);
+  }
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);
   // different rows are alternatives for the data association (a prediction error of a lane).
@@ -149,15 +274,27 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
     const geometry::SegmentIndex::Entry& entry = index_.entries()[hit.entry];
     if (std::find(rows_seen.begin(), rows_seen.end(), entry.row) != rows_seen.end()) continue;
     rows_seen.push_back(entry.row);
-    if (auto c = Linearize(hit, entry.segment, pose, mount)) candidates.push_back(*c);
+    if (auto c = Linearize(hit, entry.segment, shapes_[hit.entry], pose, mount)) candidates.push_back(*c);
   }
   return candidates;
 }
 
-double RangeNis(const EchoCandidate& candidate, double measured_range_m, const Eigen::Matrix3d& pose_covariance,
-                double range_sigma_m) {
+double RangeNoiseVariance(const EchoCandidate& candidate, const RangeSensorMount& mount,
+                          const Eigen::Matrix3d& pose_covariance, double range_sigma_m) {
+  // Second-order term of the heading: |d2r/dphi2| <= |l| + r (lever arm turning, beam tilting),
+  // and E[(r''/2 dphi^2)^2] - E[r''/2 dphi^2]^2 = r''^2 sigma_phi^4 / 2 for a Gaussian heading
+  // error; negligible once the heading is known, it keeps the first echoes after initialisation
+  // (sigma_phi ~ 0.2 rad) from locking the heading on a linearization error.
+  const double curvature = mount.lever_arm_m.norm() + candidate.predicted_range_m;
+  const double heading_variance = pose_covariance(2, 2);
+  return range_sigma_m * range_sigma_m + 0.5 * curvature * curvature * heading_variance * heading_variance;
+}
+
+double RangeNis(const EchoCandidate& candidate, const RangeSensorMount& mount, double measured_range_m,
+                const Eigen::Matrix3d& pose_covariance, double range_sigma_m) {
   const double y = measured_range_m - candidate.predicted_range_m;
-  const double s = candidate.jacobian * pose_covariance * candidate.jacobian.transpose() + range_sigma_m * range_sigma_m;
+  const double s = candidate.jacobian * pose_covariance * candidate.jacobian.transpose() +
+                   RangeNoiseVariance(candidate, mount, pose_covariance, range_sigma_m);
   return y * y / s;
 }
 
@@ -168,7 +305,7 @@ MapAidedMeasurement MakeMapAidedMeasurement(const EchoCandidate& candidate, cons
     MapAidedMeasurement m;
     m.innovation = Eigen::VectorXd::Constant(1, measured_range_m - candidate.predicted_range_m);
     m.jacobian = candidate.jacobian;
-    m.noise = Eigen::MatrixXd::Constant(1, 1, config.range_sigma_m * config.range_sigma_m);
+    m.noise = Eigen::MatrixXd::Constant(1, 1, RangeNoiseVariance(candidate, mount, pose_covariance, config.range_sigma_m));
     return m;
   }
   const std::optional<RangeSlab> slab = HeadingWidenedSlab(candidate, mount, pose, std::sqrt(pose_covariance(2, 2)),

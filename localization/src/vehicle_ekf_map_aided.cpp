@@ -12,7 +12,7 @@ void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
   if (vehicle_.ultrasonic.empty()) {
     throw std::invalid_argument("row map: the vehicle '" + vehicle_.name + "' has no ultrasonic sensor to use it");
   }
-  ranging_ = std::make_shared<const RowMapRanging>(map, origin_);
+  ranging_ = std::make_shared<const RowMapRanging>(map, origin_, config_.map_aided.row_smoothing_m);
 }
 
 ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
@@ -38,7 +38,7 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   const EchoCandidate* best = nullptr;
   double best_nis = std::numeric_limits<double>::infinity();
   for (const EchoCandidate& c : candidates) {
-    const double nis = RangeNis(c, *ping.range_m, pose_covariance, config.range_sigma_m);
+    const double nis = RangeNis(c, mount, *ping.range_m, pose_covariance, config.range_sigma_m);
     if (nis < best_nis || best == nullptr) {
       best_nis = nis;
       best = &c;

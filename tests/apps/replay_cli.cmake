@@ -30,8 +30,8 @@ rowloc_cli_test(replay_rejects_bad_filter OFF "bad-gate.json: gps.gate_probabili
                 --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/bad-gate.json -o ${_replay_out}/x.ndjson)
 rowloc_cli_test(replay_rejects_wrong_vehicle OFF "'left' is not a wheel of the vehicle 'agrimaro-swerve'|wheel order"
                 replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_swerve} -o ${_replay_out}/x.ndjson)
-# Ultrasonic pings are counted as read but unused (the map-aided update is issue 5); --skip drops a
-# message type (ablation runs) and counts it.
+# Without --map, ultrasonic pings are counted as read but unused; --skip drops a message type
+# (ablation runs) and counts it.
 rowloc_cli_test(replay_counts_unused_ultrasonic ON "22 ultrasonic pings read but not used"
                 replay ${_logs}/vineyard-002-1us-echoes.ndjson
                 --vehicle ${PROJECT_SOURCE_DIR}/config/vehicles/vineyard-ugv-4ws.json -o ${_replay_out}/pings.ndjson)
@@ -39,3 +39,22 @@ rowloc_cli_test(replay_skip_counts_skipped_messages ON "143 messages skipped \\(
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve} --skip imu -o ${_replay_out}/skip.ndjson)
 rowloc_cli_test(replay_rejects_unknown_skip_type OFF "--skip"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve} --skip lidar -o ${_replay_out}/x.ndjson)
+# With --map the echoes update the filter (map-aided update, issue 5): the one-sensor vineyard run of
+# simulate_cli.cmake against its true row map; and clear errors for a missing or bad map and for a
+# vehicle without rangers.
+set(_ugv ${PROJECT_SOURCE_DIR}/config/vehicles/vineyard-ugv-4ws.json)
+rowloc_cli_test(replay_map_aided_uses_echoes ON
+                "map-aided \\(range\\): [0-9]+ echoes; [0-9]+ without a row segment.*updates ultrasonic: [0-9]+ accepted"
+                replay ${_sim_out}/vineyard/sensors.ndjson --vehicle ${_ugv} --map ${_sim_out}/vineyard/row-map.geojson
+                -o ${_replay_out}/vineyard-map.ndjson)
+set_tests_properties(apps.simulate_runs_vineyard PROPERTIES FIXTURES_SETUP simulate_vineyard)
+set_tests_properties(apps.replay_map_aided_uses_echoes PROPERTIES FIXTURES_REQUIRED simulate_vineyard)
+rowloc_cli_test(replay_rejects_missing_map OFF "no-such-map.geojson"
+                replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_ugv} --map no-such-map.geojson
+                -o ${_replay_out}/x.ndjson)
+rowloc_cli_test(replay_rejects_bad_map OFF "nan_coordinate.geojson"
+                replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_ugv}
+                --map ${PROJECT_SOURCE_DIR}/tests/data/maps/nan_coordinate.geojson -o ${_replay_out}/x.ndjson)
+rowloc_cli_test(replay_rejects_map_without_rangers OFF "has no ultrasonic sensor to use it"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
+                --map ${PROJECT_SOURCE_DIR}/maps/sample-vineyard.geojson -o ${_replay_out}/x.ndjson)

@@ -78,6 +78,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.map_aided.cone_half_angle_rad, b.map_aided.cone_half_angle_rad);
   EXPECT_EQ(a.map_aided.max_range_m, b.map_aided.max_range_m);
   EXPECT_EQ(a.map_aided.k_sigma, b.map_aided.k_sigma);
+  EXPECT_EQ(a.map_aided.row_smoothing_m, b.map_aided.row_smoothing_m);
   EXPECT_EQ(a.map_aided.gate_probability, b.map_aided.gate_probability);
   EXPECT_EQ(a.max_prediction_step_s, b.max_prediction_step_s);
   EXPECT_EQ(a.max_prediction_gap_s, b.max_prediction_gap_s);
@@ -141,7 +142,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 47u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 48u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());

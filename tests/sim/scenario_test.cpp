@@ -68,7 +68,9 @@ TEST(ScenarioTest, EveryShippedScenarioLoads) {
   }
   for (const char* expected : {"vineyard-002-1us", "vineyard-002-2us", "vineyard-002-4us", "vineyard-002-8us",
                                "vineyard-002-rough-4us", "agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel",
-                               "slip-odometry-loops", "slip-odometry-turns", "tracked-straight", "tracked-circle"}) {
+                               "slip-odometry-loops", "slip-odometry-turns", "tracked-straight", "tracked-circle",
+                               "vineyard-002-north-4us", "vineyard-002-4us-miss30", "vineyard-002-4us-gnss-loss",
+                               "vineyard-curved-4us"}) {
     EXPECT_TRUE(names.contains(expected)) << expected;
   }
 }
@@ -86,6 +88,19 @@ TEST(ScenarioTest, VineyardScenariosDifferOnlyInTheirRangers) {
     EXPECT_DOUBLE_EQ(scenario.gnss->config.sigma_horizontal_m, 0.6);
     EXPECT_DOUBLE_EQ(scenario.world->row_spacing_m, 2.5);
   }
+}
+
+TEST(ScenarioTest, RobustnessVariantsChangeOneThingOfTheFourSensorRun) {
+  const Scenario base = LoadScenario(ScenarioDir() / "vineyard-002-4us.json");
+  const Scenario miss = LoadScenario(ScenarioDir() / "vineyard-002-4us-miss30.json");
+  EXPECT_DOUBLE_EQ(miss.ultrasonic->params.miss_probability, 0.3);
+  EXPECT_EQ(miss.ultrasonic->mounts, base.ultrasonic->mounts);
+  const Scenario loss = LoadScenario(ScenarioDir() / "vineyard-002-4us-gnss-loss.json");
+  ASSERT_TRUE(loss.gnss->off_after_s.has_value());
+  EXPECT_DOUBLE_EQ(*loss.gnss->off_after_s, 540.0);
+  const Scenario north = LoadScenario(ScenarioDir() / "vineyard-002-north-4us.json");
+  EXPECT_NEAR(north.world->heading_rad, std::numbers::pi / 2, 1e-15);  // rows along y
+  EXPECT_EQ(LoadScenario(ScenarioDir() / "vineyard-002-8us.json").vehicle.ultrasonic.size(), 8u);
 }
 
 TEST(ScenarioTest, MountsReferToTheVehicleOrAreGiven) {

@@ -127,6 +127,9 @@ struct MapAidedConfig {
   double cone_half_angle_rad = 0.1308996938995747;  ///< half aperture of the sound cone, in (0, pi/2)
   double max_range_m = 4.0;                         ///< the sensor's range limit, m
   double k_sigma = 3.0;  ///< slab d_m +- k sigma and k-sigma ellipse of the cut methods; candidate window
+  /// Arc length over which a row outline's direction is averaged for the range model, > 0 (below the
+  /// segment length: each segment's own direction), m; map_aided_ranging.hpp explains why.
+  double row_smoothing_m = 2.0;
   double gate_probability = 0.9999;
 };
 

@@ -3,14 +3,22 @@
 // it gives the filter, by one of three methods (MapAidedMethod, filter_config.hpp).
 //
 // Echo model. A sensor at lever arm l (body frame) with beam direction b and a sound cone of half
-// aperture a sits at p_s = p + R(phi) l. Its echo comes from the nearest reflecting point of the
-// row outlines inside the cone (geometry/cone_cast.hpp), so against one segment with unit normal n
-// (towards the sensor) and line n^T x = c, with gamma the angle between the beam and -n:
-//   perpendicular (gamma <= a, foot of the perpendicular on the segment):  r = n^T p_s - c,
-//   cone edge (gamma > a, the edge ray e nearest the normal hits first):   r = (c - n^T p_s)/(n^T e),
-//   segment end q (the nearest point in the cone is a vertex):            r = |p_s - q|.
-// Each is smooth in (X, Y, phi) and its Jacobian is analytic (RangeToLineJacobian for the edge
-// ray); the case is decided at the predicted pose (tests compare with central differences).
+// aperture a sits at p_s = p + R(phi) l. Its echo comes from the nearest reflecting point q of the
+// row outlines inside the cone (geometry/cone_cast.hpp): the predicted range is that cast range,
+// exact for the map. Its derivative treats the row near q as straight (seed 002 ch. 4 models a row
+// as a line), with the row's direction averaged over row_smoothing_m of the outline: n is the unit
+// normal of that direction towards the sensor, gamma the angle between the beam and -n, and
+//   normal inside the cone (gamma <= a):  r = n^T p_s - c                        (kPerpendicular),
+//   otherwise (the cone's edge ray e):    r = (c - n^T p_s) / (n^T e)            (kConeEdge),
+// with c chosen so that r equals the cast range at the predicted pose (kSegmentEnd: q is a vertex).
+// Why not the local segment: the slope of each short segment of a canopy outline (leaf roughness,
+// width that varies along the row) would make the range depend on the along-row position, and the
+// filter would take that as along-row information; it is aliased (the pattern repeats every few
+// decimetres to metres) and it locked the along-row estimate 2 m off on the rough-canopy scenario
+// with a 1.5 m initial error. With the smoothed direction, along-row information comes only from
+// features longer than row_smoothing_m (row ends, curves), which are real. Jacobians: analytic
+// (RangeToLineJacobian for the edge ray); the tests compare them with central differences on
+// straight rows.
 //
 // Segment selection (SPEC §6 step 2): a cone cast of every row segment from the predicted sensor
 // pose (SegmentIndex::ConeCastAll, R-tree); the first hit and every hit within a window of it are
@@ -18,7 +26,9 @@
 // filter keeps the candidate with the smallest range NIS and gates it (chi-square, 1 dof).
 //
 // Methods (SPEC §6 steps 3-5):
-// - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2. The consistent method.
+// - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2 + (|l| + r)^2 sigma_phi^4 / 2 (the
+//   second-order heading term: it keeps the first echoes after initialisation, sigma_phi ~ 0.2 rad,
+//   from locking the heading on a linearization error). The consistent method.
 // - ellipsoid_cut (seed 002 ch. 4): the slab d_m +- k sigma (range_slab.hpp: beam/normal angle,
 //   cone, lever arm) widened by k sigma_phi |d beta/d phi| for the heading uncertainty, cuts the
 //   k-sigma position ellipse E(p, k^2 P_pp) (geometry::ParallelCut); the new centre c+ is a
@@ -54,8 +64,8 @@ struct EchoCandidate {
   EchoGeometry geometry = EchoGeometry::kPerpendicular;
   double predicted_range_m = 0.0;
   Eigen::RowVector3d jacobian = Eigen::RowVector3d::Zero();  ///< d r / d(X, Y, phi): (1, 1, m/rad)
-  /// The reflecting line, normal towards the sensor: the segment's line, or at a segment end the
-  /// line through the end perpendicular to the sensor direction (the slab of the cut methods).
+  /// The local straight row (normal towards the sensor) that the range model and the slabs of the
+  /// cut methods use; r(pose) against it equals predicted_range_m.
   EdgeLine edge;
 };
 
@@ -63,11 +73,23 @@ struct EchoCandidate {
 class RowMapRanging {
  public:
   /// The map's rows are re-expressed from the map's origin to `filter_origin` through WGS84 when the
-  /// two differ (GeographicLib; heights taken as the origins'). Throws std::invalid_argument when
-  /// the map is invalid (geometry::ValidateRowMap: e.g. no rows) or an origin is out of range.
-  RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin);
+  /// two differ (GeographicLib; heights taken as the origins'). row_smoothing_m: arc length over
+  /// which a row's direction is averaged (0: each segment's own). Throws std::invalid_argument when
+  /// the map is invalid (geometry::ValidateRowMap: e.g. no rows), an origin is out of range or
+  /// row_smoothing_m is negative or not finite.
+  RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin, double row_smoothing_m);
 
   const geometry::SegmentIndex& index() const { return index_; }
+
+  /// The smoothed shape of the outline around one segment (per SegmentIndex entry).
+  struct EntryShape {
+    Eigen::Vector2d tangent;        ///< row direction at the segment's middle (unit)
+    Eigen::Vector2d start_tangent;  ///< at its first vertex (a vertex that is not a corner)
+    Eigen::Vector2d end_tangent;    ///< at its second vertex
+    bool start_is_corner = false;   ///< a corner: echoes from that vertex use the point model
+    bool end_is_corner = false;
+  };
+  const std::vector<EntryShape>& shapes() const { return shapes_; }
 
   /// Segments a beam from `pose` (X, Y, phi) can hit within max_range_m, nearest first: the first
   /// hit and every hit whose range is within window_m of it. Empty: the cone meets no segment.
@@ -76,7 +98,10 @@ class RowMapRanging {
                                         double max_range_m, double window_m) const;
 
  private:
+  RowMapRanging(const geometry::RowMap& local_map, double row_smoothing_m);
+  static std::vector<EntryShape> Shapes(const geometry::RowMap& local_map, double row_smoothing_m);
   geometry::SegmentIndex index_;
+  std::vector<EntryShape> shapes_;  ///< per index entry
 };
 
 /// The filter measurement of one echo, in the pose (X, Y, phi) of the state.
@@ -87,9 +112,14 @@ struct MapAidedMeasurement {
   geometry::CutStatus cut_status = geometry::CutStatus::kUpdated;  ///< cut methods; kUpdated for range
 };
 
-/// Range NIS (y^2 / (H P H^T + sigma^2)) of a candidate for the measured range.
-double RangeNis(const EchoCandidate& candidate, double measured_range_m, const Eigen::Matrix3d& pose_covariance,
-                double range_sigma_m);
+/// Variance of a range against the map for the range method: sigma^2 + (|l| + r)^2 sigma_phi^4 / 2
+/// (the second-order heading term of the range; see the header comment).
+double RangeNoiseVariance(const EchoCandidate& candidate, const RangeSensorMount& mount,
+                          const Eigen::Matrix3d& pose_covariance, double range_sigma_m);
+
+/// Range NIS y^2 / (H P H^T + RangeNoiseVariance) of a candidate for the measured range.
+double RangeNis(const EchoCandidate& candidate, const RangeSensorMount& mount, double measured_range_m,
+                const Eigen::Matrix3d& pose_covariance, double range_sigma_m);
 
 /// The measurement of `config.method` for the chosen candidate. pose / pose_covariance: the
 /// predicted (X, Y, phi) and its covariance (positive definite). For the cut methods the result has
