@@ -29,6 +29,7 @@ struct EvaluateOptions {
   std::string map_path;
   std::size_t max_lag = 50;
   bool clip_to_truth = false;
+  double settle_s = 0.0;  ///< estimates and updates of the first settle_s after the first estimate are not evaluated
   double drift_min_duration_s = 5.0;
   sim::PlotOptions plot;
   bool no_plots = false;
@@ -65,12 +66,26 @@ void ClipToTruth(sim::EstimateStream& estimates, const sim::TruthStream& truth) 
   }
 }
 
+/// --settle S: the filter's convergence (the first S seconds after its first estimate) is left out,
+/// so that mean and max describe the converged filter; the count is logged.
+void DropSettling(sim::EstimateStream& estimates, double settle_s) {
+  if (settle_s <= 0.0 || estimates.estimates.empty()) return;
+  const double until = estimates.estimates.front().t_s + settle_s;
+  const auto settling = [&](const auto& sample) { return sample.t_s < until; };
+  const auto dropped_estimates = std::erase_if(estimates.estimates, settling);
+  const auto dropped_updates = std::erase_if(estimates.updates, settling);
+  spdlog::info("--settle {} s: {} estimates and {} updates before t = {} s not evaluated", settle_s,
+               dropped_estimates, dropped_updates, until);
+  if (estimates.estimates.empty()) throw std::runtime_error("--settle: no estimate left after " + std::to_string(until) + " s");
+}
+
 void RunEvaluate(const EvaluateOptions& o) {
   if (o.json) spdlog::set_default_logger(spdlog::stderr_color_mt("rowloc-evaluate"));  // stdout is for JSON
   const sim::TruthStream truth = sim::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
   spdlog::info("{}: {} truth samples", o.truth_path, truth.samples.size());
   sim::EstimateStream estimates = sim::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
   if (o.clip_to_truth) ClipToTruth(estimates, truth);
+  DropSettling(estimates, o.settle_s);
   spdlog::info("{}: {} estimates, {} updates", o.estimates_path, estimates.estimates.size(), estimates.updates.size());
   std::optional<geometry::RowMap> map;
   sim::EvaluationOptions options;
@@ -110,6 +125,8 @@ void RegisterEvaluateCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--k-sigma", o->plot.k_sigma, "Ellipse and envelope scale k (P = k^2 S)")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-plots", o->no_plots, "Do not write or draw plots");
+  cmd->add_option("--settle", o->settle_s, "Leave out the first S seconds after the first estimate (convergence)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--clip-to-truth", o->clip_to_truth,
                 "Drop (and count) estimates outside the truth's time span instead of failing");
   cmd->add_flag("--json", o->json, "Print the JSON summary to stdout (logs go to stderr)");

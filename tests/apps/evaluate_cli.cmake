@@ -20,6 +20,12 @@ rowloc_cli_test(evaluate_clip_to_truth_drops_and_counts ON
                 "--clip-to-truth: 1 estimates and 0 updates outside the truth's span \\[0 s, 20 s\\] not evaluated.*position, total"
                 evaluate ${_eval_data}/truth.ndjson ${_eval_data}/estimates_outside_truth.ndjson --clip-to-truth
                 -o ${_eval_out}/clipped --no-plots)
+# --settle S leaves out the first S seconds after the first estimate (convergence), and says so.
+rowloc_cli_test(evaluate_settle_drops_the_first_seconds ON
+                "--settle 5 s: 5 estimates and [0-9]+ updates before t = 5 s not evaluated.*position, total \\[m\\] +16 "
+                evaluate ${_eval_data}/truth.ndjson ${_eval_data}/estimates.ndjson --settle 5 -o ${_eval_out}/settle --no-plots)
+rowloc_cli_test(evaluate_settle_past_the_end_is_an_error OFF "--settle: no estimate left"
+                evaluate ${_eval_data}/truth.ndjson ${_eval_data}/estimates.ndjson --settle 100 -o ${_eval_out}/settle2 --no-plots)
 
 # Exit status and written files: a small checker script generated here (run_cli.cmake checks
 # only success/failure).

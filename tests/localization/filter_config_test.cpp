@@ -133,6 +133,22 @@ TEST(FilterConfig, NoSlipModelFileDiffersOnlyInNameSlipSwitchAndWheelSigma) {
   EXPECT_TRUE(FilterConfig{}.slip_aware_odometry.enabled);  // the default is slip-aware
 }
 
+TEST(FilterConfig, MethodAndSlopeFilesDifferFromTheDefaultInOneField) {
+  FilterConfig cut;
+  cut.name = "map-ellipsoid-cut";
+  cut.map_aided.method = MapAidedMethod::kEllipsoidCut;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("map-ellipsoid-cut")), cut);
+  FilterConfig deprior;
+  deprior.name = "map-ellipsoid-cut-deprior";
+  deprior.map_aided.method = MapAidedMethod::kEllipsoidCutDeprior;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("map-ellipsoid-cut-deprior")), deprior);
+  FilterConfig sloped;  // gravity on slopes in the flat-ground IMU model (docs/localization-filter.md)
+  sloped.name = "sloped-terrain";
+  sloped.imu.accel_sigma_mps2 = 0.3;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("sloped-terrain")), sloped);
+  EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
+}
+
 TEST(FilterConfig, EqualityHelperSeesADifference) {
   FilterConfig other;
   other.vio.gate_probability = 0.99;

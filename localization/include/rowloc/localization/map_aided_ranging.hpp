@@ -11,6 +11,9 @@
 //   normal inside the cone (gamma <= a):  r = n^T p_s - c                        (kPerpendicular),
 //   otherwise (the cone's edge ray e):    r = (c - n^T p_s) / (n^T e)            (kConeEdge),
 // with c chosen so that r equals the cast range at the predicted pose (kSegmentEnd: q is a vertex).
+// At a corner of the outline (a turn of more than 45 degrees over a quarter of row_smoothing_m: the
+// end caps of a canopy polygon, the ends of an open row) the echo comes from that point:
+//   r = |p_s - q|, dr/dp = u^T, u = (p_s - q) / r                                (kSegmentEnd).
 // Why not the local segment: the slope of each short segment of a canopy outline (leaf roughness,
 // width that varies along the row) would make the range depend on the along-row position, and the
 // filter would take that as along-row information; it is aliased (the pattern repeats every few
