@@ -7,9 +7,11 @@
 // map; the filter side then picks the row segment from the *predicted* pose (R-tree cone cast),
 // turns the range into a slab (localization::MakeRangeSlab) and parallel-cuts the ellipse
 // (geometry::ParallelCut, SPEC §4), one sensor after the other, as in seed 002 ch. 4.
-// Heading is taken as known here; the filter (issue 5) accounts for its uncertainty.
+// Heading is taken as known here; the filter (issue 5) accounts for its uncertainty. --plot DIR
+// draws the rows, the truth, the slabs and the ellipse before and after each cut (example_plot.hpp).
 #include "commands.hpp"
 #include "ellipse_report.hpp"
+#include "example_plot.hpp"
 
 #include "rowloc/geometry/cone_cast.hpp"
 #include "rowloc/geometry/ellipsoid.hpp"
@@ -26,6 +28,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rowloc::apps {
 namespace {
@@ -40,6 +43,7 @@ struct ExampleOptions {
   double k_sigma = 3.0;          // ellipse scale k: P = k^2 S
   double range_sigma_m = 0.003;  // ultrasonic range standard deviation (seed 002), m
   double max_range_m = 4.0;
+  std::string plot_dir;          // --plot: directory of the picture (empty: none)
 };
 
 struct Sensor {
@@ -127,6 +131,8 @@ int RunExample(const ExampleOptions& o) {
              truth.position_m.y(), truth.heading_rad * 180.0 / std::numbers::pi);
   geometry::Ellipsoid<2> ellipse = geometry::Ellipsoid<2>::FromCovariance(
       predicted, Eigen::Matrix2d::Identity() * o.sigma_m * o.sigma_m, o.k_sigma);
+  const geometry::Ellipsoid<2> predicted_ellipse = ellipse;
+  std::vector<ExampleCutStep> steps;
   fmt::print("predicted ({:.0f}-sigma): {}\n", o.k_sigma,
              FormatEllipse(Summarize(ellipse.center(), ellipse.shape())));
 
@@ -149,13 +155,18 @@ int RunExample(const ExampleOptions& o) {
     const auto cut = geometry::ParallelCut(ellipse, slab->normal, slab->lower_m, slab->upper_m);
     PrintSlabAndCut(sensor, echo->hit.range_m, *slab, cut);
     if (cut.status == geometry::CutStatus::kUpdated) ellipse = cut.ellipsoid;
+    steps.push_back({sensor.name, *slab, ellipse});
   }
+
   const Eigen::Vector2d error = ellipse.center() - truth.position_m;
   fmt::print("result: {}\n", FormatEllipse(Summarize(ellipse.center(), ellipse.shape())));
   fmt::print("error of the centre: across {:+.4f} m, along {:+.4f} m (before: across {:+.4f}, along {:+.4f});"
              " truth inside the ellipse: {}\n",
              (rot.inverse() * error).y(), (rot.inverse() * error).x(), o.error_across_m, o.error_along_m,
              ellipse.Contains(truth.position_m) ? "yes" : "NO");
+  if (!o.plot_dir.empty()) {
+    fmt::print("{}\n", WriteExamplePlot(o.plot_dir, map, truth.position_m, predicted_ellipse, steps));
+  }
   return ellipse.Contains(truth.position_m) ? 0 : 1;
 }
 
@@ -175,6 +186,8 @@ void RegisterExampleCommand(CLI::App& app) {
   cmd->add_option("--k-sigma", options->k_sigma, "Ellipse scale k (P = k^2 S)")->check(CLI::PositiveNumber);
   cmd->add_option("--range-sigma", options->range_sigma_m, "Ultrasonic range standard deviation [m]")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--plot", options->plot_dir,
+                  "Directory for the picture: rows, truth, slabs, ellipse before and after each cut (cuts.svg)");
   cmd->callback([options] {
     const int code = RunExample(*options);
     if (code != 0) throw CLI::RuntimeError(code);
