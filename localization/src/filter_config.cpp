@@ -35,6 +35,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"process_noise.velocity_mps_per_sqrt_hz", q.velocity_mps_per_sqrt_hz},
       {"process_noise.steering_rate_radps_per_sqrt_hz", q.steering_rate_radps_per_sqrt_hz},
       {"process_noise.gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz},
+      {"process_noise.accel_bias_mps2_per_sqrt_hz", q.accel_bias_mps2_per_sqrt_hz},
       {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m},
       {"slip_aware_odometry.slip_gradient_initial_nm", s.slip_gradient_initial_nm},
       {"slip_aware_odometry.slip_gradient_sigma_nm", s.slip_gradient_sigma_nm},
@@ -48,6 +49,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"initialisation.acceleration_sigma_mps2", i.acceleration_sigma_mps2},
       {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
       {"initialisation.steering_sigma_rad", i.steering_sigma_rad},
+      {"initialisation.accel_bias_sigma_mps2", i.accel_bias_sigma_mps2},
       {"gps.sigma_scale", c.gps.sigma_scale},
       {"gps.sigma_floor_rtk_fixed_m", c.gps.sigma_floor_rtk_fixed_m},
       {"gps.sigma_floor_rtk_float_m", c.gps.sigma_floor_rtk_float_m},
@@ -84,7 +86,7 @@ FilterConfig ReadConfig(Reader& root) {
     Reader q = root.Object("process_noise");
     c.process_noise = {q.Number("jerk_mps3_per_sqrt_hz"), q.Number("yaw_acceleration_radps2_per_sqrt_hz"),
                        q.Number("velocity_mps_per_sqrt_hz"), q.Number("steering_rate_radps_per_sqrt_hz"),
-                       q.Number("gyro_bias_radps_per_sqrt_hz")};
+                       q.Number("gyro_bias_radps_per_sqrt_hz"), q.Number("accel_bias_mps2_per_sqrt_hz")};
     q.RejectUnknownKeys();
   }
   {
@@ -100,7 +102,7 @@ FilterConfig ReadConfig(Reader& root) {
     c.initialisation = {i.Number("heading_baseline_m"),     i.Number("heading_sigma_rad"),
                         i.Number("velocity_sigma_mps"),     i.Number("yaw_rate_sigma_radps"),
                         i.Number("acceleration_sigma_mps2"), i.Number("gyro_bias_sigma_radps"),
-                        i.Number("steering_sigma_rad")};
+                        i.Number("steering_sigma_rad"), i.Number("accel_bias_sigma_mps2")};
     i.RejectUnknownKeys();
   }
   {
@@ -112,7 +114,8 @@ FilterConfig ReadConfig(Reader& root) {
   }
   {
     Reader m = root.Object("imu");
-    c.imu = {m.Number("accel_sigma_mps2"), m.Number("gyro_sigma_radps"), m.Number("gate_probability")};
+    c.imu = {m.Number("accel_sigma_mps2"), m.Number("gyro_sigma_radps"), m.Number("gate_probability"),
+             m.Bool("estimate_accel_bias")};
     m.RejectUnknownKeys();
   }
   {

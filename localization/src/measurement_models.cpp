@@ -45,7 +45,7 @@ LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vec
   return m;
 }
 
-LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
+LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, int accel_bias_index) {
   LinearizedMeasurement m = Zeros(3, x.size());
   const double r = x(L::kYawRate);
   m.predicted << x(L::kAx) - r * r * l.x(), x(L::kAy) - r * r * l.y(), r + x(L::kGyroBias);
@@ -55,6 +55,12 @@ LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& 
   m.jacobian(1, L::kYawRate) = -2.0 * r * l.y();
   m.jacobian(2, L::kYawRate) = 1.0;
   m.jacobian(2, L::kGyroBias) = 1.0;
+  if (accel_bias_index >= 0) {
+    m.predicted(0) += x(accel_bias_index);
+    m.predicted(1) += x(accel_bias_index + 1);
+    m.jacobian(0, accel_bias_index) = 1.0;
+    m.jacobian(1, accel_bias_index + 1) = 1.0;
+  }
   return m;
 }
 

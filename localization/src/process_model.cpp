@@ -60,6 +60,11 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
   p(L::kAx, L::kAx) += accel;
   p(L::kAy, L::kAy) += accel;
   p(L::kGyroBias, L::kGyroBias) += q.gyro_bias_radps_per_sqrt_hz * q.gyro_bias_radps_per_sqrt_hz * dt;
+  if (layout.accel_bias >= 0) {
+    const double bias = q.accel_bias_mps2_per_sqrt_hz * q.accel_bias_mps2_per_sqrt_hz * dt;
+    p(layout.accel_bias, layout.accel_bias) += bias;
+    p(layout.accel_bias + 1, layout.accel_bias + 1) += bias;
+  }
   const double steering = q.steering_rate_radps_per_sqrt_hz * q.steering_rate_radps_per_sqrt_hz * dt;
   const SlipAwareOdometryConfig& s = config.slip_aware_odometry;
   for (std::size_t i = 0; i < layout.wheel_count(); ++i) {

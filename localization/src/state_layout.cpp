@@ -2,7 +2,7 @@
 
 namespace rowloc::localization {
 
-StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry) {
+StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias) {
   StateLayout layout;
   const std::size_t n = vehicle.wheels.size();
   layout.steering.assign(n, -1);
@@ -18,6 +18,10 @@ StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_awar
       layout.slip_gradient[i] = next++;
     }
   }
+  if (accel_bias) {
+    layout.accel_bias = next;
+    next += 2;
+  }
   layout.size = next;
   return layout;
 }
@@ -31,6 +35,10 @@ std::vector<std::string> StateLayout::Names(const mapio::VehicleConfig& vehicle)
     if (steering[i] >= 0) names[static_cast<std::size_t>(steering[i])] = "delta_" + wheel;
     if (rolling_radius[i] >= 0) names[static_cast<std::size_t>(rolling_radius[i])] = "R_" + wheel;
     if (slip_gradient[i] >= 0) names[static_cast<std::size_t>(slip_gradient[i])] = "k_" + wheel;
+  }
+  if (accel_bias >= 0) {
+    names[static_cast<std::size_t>(accel_bias)] = "bax_mps2";
+    names[static_cast<std::size_t>(accel_bias) + 1] = "bay_mps2";
   }
   return names;
 }

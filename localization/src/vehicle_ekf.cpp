@@ -58,7 +58,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
                        const std::vector<std::string>& wheel_order)
     : vehicle_(Checked(std::move(vehicle))),
       config_(Checked(std::move(config))),
-      layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled)),
+      layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled, config_.imu.estimate_accel_bias)),
       frame_(origin),
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
@@ -158,7 +158,7 @@ ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
   // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
   const Eigen::Vector2d force = Rotation(vehicle_.imu.yaw_rad) * Eigen::Vector2d(imu.accel_x_mps2, imu.accel_y_mps2);
   Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
-  const LinearizedMeasurement h = ImuModel(x_, vehicle_.imu.position_m.head<2>());
+  const LinearizedMeasurement h = ImuModel(x_, vehicle_.imu.position_m.head<2>(), layout_.accel_bias);
   const double a = config_.imu.accel_sigma_mps2 * config_.imu.accel_sigma_mps2;
   const double g = config_.imu.gyro_sigma_radps * config_.imu.gyro_sigma_radps;
   const Eigen::Matrix3d noise = Eigen::Vector3d(a, a, g).asDiagonal();

@@ -159,6 +159,9 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
       variance(layout_.slip_gradient[i]) = slip.slip_gradient_sigma_nm * slip.slip_gradient_sigma_nm;
     }
   }
+  if (layout_.accel_bias >= 0) {
+    variance.segment<2>(layout_.accel_bias).setConstant(init.accel_bias_sigma_mps2 * init.accel_bias_sigma_mps2);
+  }
   p_.diagonal() = variance;
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());

@@ -86,6 +86,18 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return GpsAntennaModel(s, arm); }, x, "gps arm");
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, imu); }, x, "imu");
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, arm); }, x, "imu arm");
+        {  // with the accelerometer-bias states appended (StateLayout::For(..., true))
+          const StateLayout biased = StateLayout::For(vehicle, slip, true);
+          Eigen::VectorXd xb(biased.size);
+          xb << x, 0.3, -0.2;
+          ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, arm, biased.accel_bias); }, xb,
+                                       "imu accel bias");
+          const LinearizedMeasurement with = ImuModel(xb, arm, biased.accel_bias);
+          const LinearizedMeasurement without = ImuModel(x, arm);
+          EXPECT_NEAR(with.predicted(0) - without.predicted(0), 0.3, 1e-12);
+          EXPECT_NEAR(with.predicted(1) - without.predicted(1), -0.2, 1e-12);
+          EXPECT_EQ(with.predicted(2), without.predicted(2));
+        }
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return VioModel(s, arm); }, x, "vio");
         ExpectJacobianMatchesNumeric(
             [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt); }, x, "wheels");

@@ -259,6 +259,26 @@ TEST(PredictStep, StaysPositiveDefiniteOverManyStepsForEveryVehicle) {
   }
 }
 
+TEST(PredictStep, AccelerometerBiasIsARandomWalkInTime) {
+  const FilterConfig config;
+  const double q = config.process_noise.accel_bias_mps2_per_sqrt_hz;
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    SCOPED_TRACE(vehicle.name);
+    const StateLayout layout = StateLayout::For(vehicle, true, true);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(L::kVx) = 1.0;
+    x(layout.accel_bias) = 0.3;
+    x(layout.accel_bias + 1) = -0.1;
+    Eigen::MatrixXd p = Eigen::MatrixXd::Zero(layout.size, layout.size);  // the increment is Q
+    PredictStep(vehicle, layout, config, x, p, 0.02);
+    EXPECT_EQ(x(layout.accel_bias), 0.3);  // constant in the mean
+    EXPECT_EQ(x(layout.accel_bias + 1), -0.1);
+    EXPECT_NEAR(p(layout.accel_bias, layout.accel_bias), q * q * 0.02, 1e-15);
+    EXPECT_NEAR(p(layout.accel_bias + 1, layout.accel_bias + 1), q * q * 0.02, 1e-15);
+    EXPECT_EQ(p(layout.accel_bias, layout.accel_bias + 1), 0.0);
+  }
+}
+
 TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
   const FilterConfig config;
   const SlipAwareOdometryConfig& s = config.slip_aware_odometry;

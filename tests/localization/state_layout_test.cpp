@@ -36,6 +36,7 @@ void ExpectUniqueAndContiguous(const StateLayout& layout) {
       if (index >= 0) used.push_back(index);
     }
   }
+  if (layout.accel_bias >= 0) used.insert(used.end(), {layout.accel_bias, layout.accel_bias + 1});
   std::sort(used.begin(), used.end());
   ASSERT_EQ(used.size(), static_cast<std::size_t>(layout.size));
   for (std::size_t i = 0; i < used.size(); ++i) EXPECT_EQ(used[i], static_cast<int>(i));
@@ -67,6 +68,21 @@ TEST(StateLayout, SizesOfTheShippedVehicles) {
     EXPECT_EQ(slip.size, e.size + 2 * static_cast<int>(e.vehicle.wheels.size()));
     EXPECT_TRUE(slip.slip_aware());
     EXPECT_EQ(slip.steering, plain.steering);  // augmented states come after the steering angles
+  }
+  for (const Expected& e : ShippedVehicles()) {  // the accelerometer bias comes last, after everything
+    for (bool slip : {false, true}) {
+      const StateLayout without = StateLayout::For(e.vehicle, slip);
+      const StateLayout with = StateLayout::For(e.vehicle, slip, true);
+      EXPECT_EQ(without.accel_bias, -1);
+      EXPECT_EQ(with.accel_bias, without.size);
+      EXPECT_EQ(with.size, without.size + 2);
+      EXPECT_EQ(with.steering, without.steering);
+      EXPECT_EQ(with.rolling_radius, without.rolling_radius);
+      ExpectUniqueAndContiguous(with);
+      const auto names = with.Names(e.vehicle);
+      EXPECT_EQ(names[static_cast<std::size_t>(with.accel_bias)], "bax_mps2");
+      EXPECT_EQ(names.back(), "bay_mps2");
+    }
   }
   // The AgriMaRo design (seed 000) has 12 states.
   EXPECT_EQ(StateLayout::For(mapio::AgrimaroSwerveConfig(), false).size, 12);

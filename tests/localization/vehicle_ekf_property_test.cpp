@@ -76,7 +76,7 @@ TEST(VehicleEkfProperty, CovarianceStaysSymmetricPositiveDefinite) {
   const long steps = long_run ? 1000000 : 100000;
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
   VehicleEkf ekf = MakeEkf(v, true);
-  ASSERT_EQ(ekf.layout().size, 18);
+  ASSERT_EQ(ekf.layout().size, 20);  // 9 base + 3 steering + 2 x 3 slip + 2 accelerometer bias
   const mapio::LocalFrame frame(kOrigin);
   const Segment drive{0.0, 1.0, 0.2, 0.1};
   const Pose start{{0.0, 0.0}, 0.3};

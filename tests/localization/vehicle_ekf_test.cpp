@@ -290,6 +290,22 @@ TEST(VehicleEkfGnss, RealPositionChangeIsReacquired) {
 }
 
 
+TEST(VehicleEkfImu, AccelerometerBiasOfASlopeIsEstimated) {
+  // Gravity on a slope (0.4 m/s^2 forward, 0.2 m/s^2 to the right: about 4 % and 2 %) on top of the
+  // IMU's readings: the bias states take it, and the velocity stays the wheels' one.
+  const VehicleConfig v = mapio::DifferentialDriveConfig();
+  const Drive d = MakeDrive(v, {}, StraightThenCircle());
+  VehicleEkf ekf = MakeEkf(v);
+  ASSERT_GE(ekf.layout().accel_bias, 0);
+  for (SensorMessage m : d.messages) {
+    if (auto* imu = std::get_if<ImuMessage>(&m)) imu->accel_x_mps2 += 0.4, imu->accel_y_mps2 -= 0.2;
+    ekf.Process(m);
+  }
+  EXPECT_NEAR(ekf.state()(ekf.layout().accel_bias), 0.4, 0.05);
+  EXPECT_NEAR(ekf.state()(ekf.layout().accel_bias + 1), -0.2, 0.05);
+  EXPECT_NEAR(ekf.state()(StateLayout::kVx), 1.0, 0.02);
+}
+
 TEST(VehicleEkfInput, SteeringAngleThroughPiIsTracked) {
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
   VehicleEkf ekf = MakeEkf(v);

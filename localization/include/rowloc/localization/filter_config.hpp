@@ -9,6 +9,9 @@
 //   process_noise.velocity_mps_per_sqrt_hz         small direct velocity noise (unmodelled forces)
 //   process_noise.steering_rate_radps_per_sqrt_hz  drives each delta
 //   process_noise.gyro_bias_radps_per_sqrt_hz      drives b_g (the IMU's bias random walk)
+//   process_noise.accel_bias_mps2_per_sqrt_hz      drives b_ax, b_ay (imu.estimate_accel_bias: the
+//                                                  bias and gravity on a slope that changes as the
+//                                                  vehicle drives)
 //   slip_aware_odometry.*_per_sqrt_m               seed 004: R_w and k_s random walks whose variance
 //                                                  grows with the distance the wheel rolled
 // Gates are probabilities p: a measurement of dimension m is rejected when its NIS exceeds the
@@ -36,6 +39,7 @@ struct ProcessNoise {
   double velocity_mps_per_sqrt_hz = 0.02;
   double steering_rate_radps_per_sqrt_hz = 0.5;
   double gyro_bias_radps_per_sqrt_hz = 2e-5;
+  double accel_bias_mps2_per_sqrt_hz = 0.05;
 };
 
 /// Seed 004: rolling radius R_w and torque/slip gradient k_s of every wheel as EKF states.
@@ -58,6 +62,7 @@ struct InitialisationConfig {
   double acceleration_sigma_mps2 = 0.5;
   double gyro_bias_sigma_radps = 0.005;
   double steering_sigma_rad = 0.05;
+  double accel_bias_sigma_mps2 = 0.5;  ///< with imu.estimate_accel_bias
 };
 
 /// Fix quality -> covariance: sigma = max(floor of the fix quality, sigma_scale x the receiver's
@@ -78,6 +83,9 @@ struct ImuNoise {
   double accel_sigma_mps2 = 0.03;  ///< per axis, per sample (white noise + unmodelled bias)
   double gyro_sigma_radps = 0.002;
   double gate_probability = 0.9999;
+  /// Estimate an accelerometer bias (b_ax, b_ay states): what the flat-ground model cannot explain,
+  /// chiefly gravity on slopes (g sin(slope): 0.4 m/s^2 at 4 %), which otherwise reads as acceleration.
+  bool estimate_accel_bias = true;
 };
 
 struct WheelNoise {

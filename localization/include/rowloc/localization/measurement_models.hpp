@@ -39,7 +39,8 @@ struct LinearizedMeasurement {
 
 LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
 
-LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+/// accel_bias_index: StateLayout::accel_bias (b_ax, b_ay added to the specific force), or -1.
+LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int accel_bias_index = -1);
 
 /// Longitudinal wheel-centre velocity v_i (m/s) of wheel `index` (see the header comment).
 double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,

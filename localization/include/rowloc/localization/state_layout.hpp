@@ -13,6 +13,8 @@
 //   8    bg_radps     rad/s    gyro bias (b_g)
 //   then, per steerable wheel in vehicle-config order:        delta_<wheel> (rad)
 //   then, with slip-aware odometry, per wheel in config order: R_<wheel> (m), k_<wheel> (N m)
+//   then, with accelerometer-bias estimation: bax_mps2, bay_mps2 (m/s^2): what the IMU reads on top
+//   of the body acceleration, chiefly gravity on sloped ground (the planar filter has no attitude)
 // Seed 000 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
 // gyro bias is moved before the steering angles here so that the base block has the same indices
 // for every vehicle kind (a swerve robot has 3 steering states, a 4WS vehicle 4, the others none).
@@ -34,11 +36,13 @@ struct StateLayout {
   std::vector<int> steering;        ///< per wheel: index of delta, or -1 (not steerable)
   std::vector<int> rolling_radius;  ///< per wheel: index of R_w, or -1 (no slip-aware odometry)
   std::vector<int> slip_gradient;   ///< per wheel: index of k_s, or -1
+  int accel_bias = -1;              ///< index of b_ax (b_ay follows), or -1 (not estimated)
   int size = kBaseSize;
 
   /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
   /// a rolling radius and a torque/slip gradient per wheel (or track).
-  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry);
+  /// With accel_bias, two accelerometer-bias states at the end.
+  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false);
 
   /// Names of the states in index order, e.g. "x_m", "delta_front", "R_rear_left" (for messages).
   std::vector<std::string> Names(const mapio::VehicleConfig& vehicle) const;
