@@ -5,8 +5,9 @@
 // cycles, so that the messages repeat lap after lap with only the time stamps shifted); the filter is
 // converged over two laps before timing, and the benchmark fails if updates are gated out.
 // Micro benchmarks: PredictStep alone (dt = 0.01 s) and KalmanUpdate of a 2-D (GNSS) measurement, both
-// on the 18-state swerve with slip-aware odometry; each iteration restores x and P first (the copy is
-// timed too; BM_RestoreStateAndCovariance is that copy alone). Run the Release build with
+// on the swerve with slip-aware odometry (20 states with the accelerometer bias); each iteration
+// restores x and P first (the copy is timed too; BM_RestoreStateAndCovariance is that copy alone).
+// Run the Release build with
 //   vehicle_ekf_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/measurement_models.hpp"
