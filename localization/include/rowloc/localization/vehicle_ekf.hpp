@@ -14,7 +14,8 @@
 // update named "ultrasonic" by the method of config.map_aided, against the segment it comes from.
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
-// max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4), a wheel count that does not match
+// max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4, a non-positive range, an
+// echo from a ranger the vehicle does not list while a row map is attached), a wheel count that does not match
 // and time going backwards throw FilterInputError and leave the filter unchanged. A gap longer than
 // max_prediction_gap_s is a clock or logging fault: the filter drops its state and re-initialises
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
