@@ -5,7 +5,8 @@
 // for skid-steer vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one
 // update line per measurement update. With --map (a GeoJSON row map, docs/map-format.md) the
 // ultrasonic echoes update the filter against the rows (map-aided update, issue 5; the method is the
-// filter file's map_aided.method) and the summary counts what happened to every echo. --skip withholds a message type (counted; ablation runs).
+// filter file's map_aided.method) and the summary counts what happened to every echo; --echo-log
+// FILE writes one line per echo with the position ellipse before and after it (scripts/plot-echoes). --skip withholds a message type (counted; ablation runs).
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -19,6 +20,7 @@
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
 
+#include <nlohmann/json.hpp>
 #include <spdlog/fmt/ranges.h>
 #include <spdlog/spdlog.h>
 
@@ -42,6 +44,7 @@ struct ReplayOptions {
   std::string vehicle_path;
   std::string filter_path;
   std::string map_path;
+  std::string echo_log_path;  ///< --echo-log: one NDJSON line per echo (EchoTrace)
   std::string output_path;
   double period_s = 0.1;
   bool no_updates = false;
@@ -121,6 +124,26 @@ void WriteUpdates(const localization::ProcessResult& result, sim::EstimateLogWri
   }
 }
 
+/// `echo` lines of --echo-log: the position (m) and its covariance (m^2, row-major) before and after
+/// the echo, its outcome, and the row segment and local straight row it was measured against.
+nlohmann::ordered_json EchoLine(double time_s, const localization::EchoTrace& e) {
+  const auto position = [](const Eigen::Vector2d& p, const Eigen::Matrix2d& c) {
+    return nlohmann::ordered_json{{"x_m", p.x()}, {"y_m", p.y()}, {"covariance_xy", {c(0, 0), c(0, 1), c(1, 0), c(1, 1)}}};
+  };
+  nlohmann::ordered_json line{{"type", "echo"},
+                      {"t", time_s},
+                      {"sensor", e.sensor},
+                      {"range_m", e.measured_range_m},
+                      {"outcome", e.outcome},
+                      {"prior", position(e.prior_position_m, e.prior_covariance)},
+                      {"posterior", position(e.posterior_position_m, e.posterior_covariance)},
+                      {"segment", nullptr},
+                      {"line", nullptr}};
+  if (e.segment) line["segment"] = {{e.segment->a.x(), e.segment->a.y()}, {e.segment->b.x(), e.segment->b.y()}};
+  if (e.line) line["line"] = {{"normal", {e.line->normal.x(), e.line->normal.y()}}, {"offset_m", e.line->offset_m}};
+  return line;
+}
+
 void RunReplay(const ReplayOptions& o) {
   const mapio::VehicleConfig vehicle = mapio::LoadVehicleConfig(o.vehicle_path);
   const localization::FilterConfig config =
@@ -138,12 +161,21 @@ void RunReplay(const ReplayOptions& o) {
   }
   std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error(o.output_path + ": cannot open for writing");
+  std::ofstream echo_log;
+  if (!o.echo_log_path.empty()) {
+    if (!ekf.has_row_map()) throw std::runtime_error("--echo-log needs --map (echoes are used only against a row map)");
+    echo_log.open(o.echo_log_path, std::ios::binary | std::ios::trunc);
+    if (!echo_log) throw std::runtime_error(o.echo_log_path + ": cannot open for writing");
+    echo_log << nlohmann::ordered_json{{"type", "echo_header"}, {"source", "rowloc replay"}, {"vehicle", vehicle.name},
+                               {"method", localization::MapAidedMethodName(config.map_aided.method)}}.dump()
+             << '\n';
+  }
   sim::EstimateLogWriter writer(out, "rowloc replay", vehicle.name, reader.header().origin);
   spdlog::info("replay {} with vehicle {} and filter {}", o.log_path, vehicle.name, config.name);
 
   TrackSlipTap tracks(vehicle);
   std::map<std::string, UpdateCounts> counts;
-  std::size_t input_errors = 0, estimates = 0, skipped = 0, ultrasonic = 0;
+  std::size_t input_errors = 0, estimates = 0, skipped = 0, ultrasonic = 0, echo_lines = 0;
   double next_output_s = -std::numeric_limits<double>::infinity();
   while (const auto message = reader.Next()) {
     if (std::find(o.skip_types.begin(), o.skip_types.end(), localization::TypeOf(*message)) != o.skip_types.end()) {
@@ -165,6 +197,10 @@ void RunReplay(const ReplayOptions& o) {
       spdlog::warn("{}:{}: track-slip observer rejected the input: {}", o.log_path, reader.line_number(), error);
     }
     WriteUpdates(result, writer, !o.no_updates, counts);
+    if (result.echo && echo_log.is_open()) {
+      echo_log << EchoLine(ekf.time_s(), *result.echo).dump() << '\n';
+      ++echo_lines;
+    }
     if (ekf.initialised() && ekf.time_s() >= next_output_s) {
       writer.Write(EstimateOf(ekf, tracks));
       ++estimates;
@@ -188,6 +224,11 @@ void RunReplay(const ReplayOptions& o) {
   }
   if (!ekf.initialised()) spdlog::warn("the filter never initialised (no GNSS baseline of {} m)",
                                        config.initialisation.heading_baseline_m);
+  if (echo_log.is_open()) {
+    echo_log.flush();
+    if (!echo_log) throw std::runtime_error(o.echo_log_path + ": write failed");
+    spdlog::info("wrote echo log {}: {} echoes", o.echo_log_path, echo_lines);
+  }
   spdlog::info("wrote {}", o.output_path);
 }
 
@@ -201,6 +242,8 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_option("--filter", o->filter_path, "Filter file (config/filters/*.json); default: built-in defaults "
                                               "(= config/filters/default.json)");
   cmd->add_option("--map", o->map_path, "Row map (GeoJSON): use the ultrasonic echoes against its rows");
+  cmd->add_option("--echo-log", o->echo_log_path,
+                  "With --map: one NDJSON line per echo, the position ellipse before and after it");
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");

@@ -102,6 +102,7 @@ ProcessResult VehicleEkf::Process(const SensorMessage& message) {
   ProcessResult applied = std::visit([this](const auto& m) { return Apply(m); }, message);
   if (!result.notice) result.notice = applied.notice;
   result.updates = std::move(applied.updates);
+  result.echo = std::move(applied.echo);
   ProjectStates();
   return result;
 }

@@ -26,12 +26,18 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   const MapAidedConfig& config = config_.map_aided;
   const Eigen::Vector3d pose = x_.head<3>();
   const Eigen::Matrix3d pose_covariance = p_.topLeftCorner<3, 3>();
+  EchoTrace& trace = result.echo.emplace();
+  trace.sensor = ping.sensor;
+  trace.measured_range_m = *ping.range_m;
+  trace.prior_position_m = trace.posterior_position_m = pose.head<2>();
+  trace.prior_covariance = trace.posterior_covariance = pose_covariance.topLeftCorner<2, 2>();
   // Candidates: every surface within k sigma (position and range) of the nearest predicted one.
   const double window_m =
       config.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config.range_sigma_m);
   const std::vector<EchoCandidate> candidates = ranging_->Candidates(pose, mount, config.max_range_m, window_m);
   if (candidates.empty()) {
     ++stats.no_segment;
+    trace.outcome = "no_segment";
     return result;
   }
   if (candidates.size() > 1) ++stats.ambiguous;
@@ -44,19 +50,25 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
       best = &c;
     }
   }
+  trace.segment = ranging_->index().entries()[best->entry].segment;
+  trace.line = best->edge;
   const MapAidedMeasurement m = MakeMapAidedMeasurement(*best, mount, pose, pose_covariance, *ping.range_m, config);
   if (m.innovation.size() == 0) {
     switch (m.cut_status) {
-      case geometry::CutStatus::kEmpty: ++stats.contradicting; break;
-      case geometry::CutStatus::kUnchanged: ++stats.uninformative; break;
-      default: ++stats.degenerate; break;
+      case geometry::CutStatus::kEmpty: ++stats.contradicting; trace.outcome = "contradicting"; break;
+      case geometry::CutStatus::kUnchanged: ++stats.uninformative; trace.outcome = "uninformative"; break;
+      default: ++stats.degenerate; trace.outcome = "degenerate"; break;
     }
     return result;
   }
   Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(m.innovation.size(), x_.size());
   jacobian.leftCols<3>() = m.jacobian;
   const double gate = m.innovation.size() == 1 ? gate_map_aided_1_ : gate_map_aided_2_;
-  result.updates.push_back(Update(ping.time_s, "ultrasonic", m.innovation, jacobian, m.noise, gate));
+  const UpdateRecord& record =
+      result.updates.emplace_back(Update(ping.time_s, "ultrasonic", m.innovation, jacobian, m.noise, gate));
+  trace.outcome = record.outcome.accepted ? "accepted" : "gated";
+  trace.posterior_position_m = x_.head<2>();
+  trace.posterior_covariance = p_.topLeftCorner<2, 2>();
   return result;
 }
 

@@ -58,3 +58,11 @@ rowloc_cli_test(replay_rejects_bad_map OFF "nan_coordinate.geojson"
 rowloc_cli_test(replay_rejects_map_without_rangers OFF "has no ultrasonic sensor to use it"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
                 --map ${PROJECT_SOURCE_DIR}/maps/sample-vineyard.geojson -o ${_replay_out}/x.ndjson)
+# --echo-log: one line per echo with the ellipse before and after it (scripts/plot-echoes); it needs --map.
+rowloc_cli_test(replay_writes_echo_log ON "wrote echo log .*vineyard-echoes\\.ndjson: [1-9][0-9]* echoes"
+                replay ${_sim_out}/vineyard/sensors.ndjson --vehicle ${_ugv} --map ${_sim_out}/vineyard/row-map.geojson
+                --echo-log ${_replay_out}/vineyard-echoes.ndjson -o ${_replay_out}/vineyard-map-2.ndjson)
+set_tests_properties(apps.replay_writes_echo_log PROPERTIES FIXTURES_REQUIRED simulate_vineyard)
+rowloc_cli_test(replay_echo_log_needs_map OFF "--echo-log needs --map"
+                replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_ugv} --echo-log ${_replay_out}/x-echoes.ndjson
+                -o ${_replay_out}/x.ndjson)

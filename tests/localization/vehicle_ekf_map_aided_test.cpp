@@ -196,8 +196,21 @@ TEST(VehicleEkfMapAided, EchoesUpdateOnlyAnInitialisedFilterAndNoEchoIsNoMeasure
   EXPECT_NEAR(r.updates[0].outcome.innovation(0), 0.4 - 0.38, 1e-9);
   EXPECT_LT(std::abs(ekf.state()(1) - 0.1), 0.002);  // pulled from 0.12 to the echo's 0.10
   EXPECT_LT(ekf.covariance()(1, 1), 1e-4);
+  // The trace of the echo: the ellipse before and after it, the segment and its line.
+  ASSERT_TRUE(r.echo.has_value());
+  EXPECT_EQ(r.echo->outcome, "accepted");
+  EXPECT_EQ(r.echo->sensor, "us_front_left");
+  EXPECT_NEAR(r.echo->prior_position_m.y(), 0.12, 1e-3);
+  EXPECT_EQ(r.echo->posterior_position_m, ekf.state().head<2>());
+  EXPECT_LT(r.echo->posterior_covariance(1, 1), 0.1 * r.echo->prior_covariance(1, 1));
+  ASSERT_TRUE(r.echo->segment.has_value() && r.echo->line.has_value());
+  EXPECT_NEAR(r.echo->line->normal.y(), -1.0, 1e-12);  // the row at y = 1, normal towards the sensor
   // A right ranger looking away from the only row: no segment in its cone.
-  EXPECT_TRUE(ekf.Process(UltrasonicMessage{1.03, "us_front_right", 1, 0.4}).updates.empty());
+  const ProcessResult away = ekf.Process(UltrasonicMessage{1.03, "us_front_right", 1, 0.4});
+  EXPECT_TRUE(away.updates.empty());
+  ASSERT_TRUE(away.echo.has_value());
+  EXPECT_EQ(away.echo->outcome, "no_segment");
+  EXPECT_EQ(away.echo->posterior_covariance, away.echo->prior_covariance);
   EXPECT_EQ(ekf.map_aided_stats().no_segment, 1u);
   EXPECT_EQ(ekf.map_aided_stats().echoes, 2u);
 }

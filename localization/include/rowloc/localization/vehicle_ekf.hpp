@@ -62,9 +62,24 @@ struct MapAidedStats {
   std::size_t uninformative = 0;  ///< cut methods: the slab holds the whole ellipse (nothing to update)
   std::size_t degenerate = 0;     ///< no usable geometry (grazing beam, sensor on a vertex, degenerate slab)
 };
+/// What one echo did to the position (the ellipse before and after it), for plots and debugging:
+/// filled for every echo with a range that reaches the map-aided update (MapAidedStats::echoes).
+struct EchoTrace {
+  std::string sensor;
+  double measured_range_m = 0.0;
+  /// "accepted", "gated", "no_segment", "contradicting", "uninformative" or "degenerate".
+  std::string outcome;
+  Eigen::Vector2d prior_position_m = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d prior_covariance = Eigen::Matrix2d::Zero();      ///< of the position, m^2
+  Eigen::Vector2d posterior_position_m = Eigen::Vector2d::Zero();  ///< = prior unless accepted
+  Eigen::Matrix2d posterior_covariance = Eigen::Matrix2d::Zero();
+  std::optional<geometry::Segment2> segment;  ///< the row segment of the chosen candidate
+  std::optional<EdgeLine> line;               ///< its local straight row (normal towards the sensor)
+};
 struct ProcessResult {
   std::vector<UpdateRecord> updates;  ///< the updates made (none before initialisation)
   std::optional<std::string> notice;  ///< initialisation, re-initialisation after a gap
+  std::optional<EchoTrace> echo;      ///< ultrasonic messages with a row map attached
 };
 
 class VehicleEkf {
