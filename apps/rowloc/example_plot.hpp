@@ -16,7 +16,7 @@
 
 namespace rowloc::apps {
 
-/// One step of the example: the slab of a sensor (nullopt: no measurement) and the ellipse after it.
+/// One step of the example: the slab of a sensor that measured, and the ellipse after its cut.
 struct ExampleCutStep {
   std::string sensor;
   localization::RangeSlab slab;
