@@ -41,9 +41,20 @@ geometry::RowMap InFilterFrame(const geometry::RowMap& map, const geometry::GeoO
   return local;
 }
 
-/// d(R(phi) l)/d phi = R(phi) (-l_y, l_x).
-Eigen::Vector2d RotatedLeverArmDerivative(const Eigen::Rotation2Dd& rotation, const Eigen::Vector2d& lever_arm) {
-  return rotation * Eigen::Vector2d(-lever_arm.y(), lever_arm.x());
+/// The sensor at a vehicle pose (X, Y, phi): its position p_s = p + R(phi) l, its beam axis
+/// R(phi) b, and d p_s / d phi = R(phi) (-l_y, l_x).
+struct SensorAtPose {
+  Eigen::Vector2d position;
+  Eigen::Vector2d axis;
+  Eigen::Vector2d d_position_d_phi;
+};
+
+SensorAtPose SensorAt(const Eigen::Vector3d& pose, const RangeSensorMount& mount) {
+  const Eigen::Rotation2Dd rotation(pose.z());
+  const Eigen::Vector2d& l = mount.lever_arm_m;
+  return {pose.head<2>() + rotation * l,
+          rotation * Eigen::Vector2d(std::cos(mount.beam_angle_rad), std::sin(mount.beam_angle_rad)),
+          rotation * Eigen::Vector2d(-l.y(), l.x())};
 }
 
 /// Arc-length parametrisation of one row's outline (closed: s wraps; open: s is clamped).
@@ -150,10 +161,9 @@ namespace {
 /// the cast range from the sensor; r = (n^T p_s - c) / cos(max(0, gamma - a)).
 std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, const geometry::Segment2& segment,
                                        const RowMapRanging::EntryShape& shape, const Eigen::Vector3d& pose,
-                                       const RangeSensorMount& mount) {
-  const Eigen::Rotation2Dd rotation(pose.z());
-  const Eigen::Vector2d sensor = pose.head<2>() + rotation * mount.lever_arm_m;
-  const Eigen::Vector2d axis = rotation * Eigen::Vector2d(std::cos(mount.beam_angle_rad), std::sin(mount.beam_angle_rad));
+                                       const RangeSensorMount& mount, const SensorAtPose& at) {
+  const Eigen::Vector2d& sensor = at.position;
+  const Eigen::Vector2d& axis = at.axis;
   const bool at_start = hit.hit.segment_param <= kEndTolerance;
   const bool at_end = at_start || hit.hit.segment_param >= 1.0 - kEndTolerance;
   if (at_end && (at_start ? shape.start_is_corner : shape.end_is_corner)) {
@@ -167,7 +177,7 @@ std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, c
     candidate.entry = hit.entry;
     candidate.geometry = EchoGeometry::kSegmentEnd;
     candidate.predicted_range_m = range;
-    candidate.jacobian << u.x(), u.y(), u.dot(RotatedLeverArmDerivative(rotation, mount.lever_arm_m));
+    candidate.jacobian << u.x(), u.y(), u.dot(at.d_position_d_phi);
     candidate.edge = EdgeLine{u, u.dot(corner)};
     return candidate;
   }
@@ -186,7 +196,7 @@ std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, c
   candidate.edge = EdgeLine{n, n.dot(sensor) - range * incidence_cos};
   if (normal_in_cone) {
     candidate.geometry = at_end ? EchoGeometry::kSegmentEnd : EchoGeometry::kPerpendicular;
-    candidate.jacobian << n.x(), n.y(), n.dot(RotatedLeverArmDerivative(rotation, mount.lever_arm_m));
+    candidate.jacobian << n.x(), n.y(), n.dot(at.d_position_d_phi);
     return candidate;
   }
   // The nearest point is on the edge ray of the cone closer to the normal.
@@ -249,9 +259,8 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
                                                      double max_range_m, double window_m) const {
   if (!pose.allFinite()) throw std::invalid_argument("RowMapRanging::Candidates: pose not finite");
   if (!(window_m >= 0.0)) throw std::invalid_argument("RowMapRanging::Candidates: window must be >= 0");
-  const Eigen::Rotation2Dd rotation(pose.z());
-  const double beam = pose.z() + mount.beam_angle_rad;
-  const geometry::Cone2 cone{pose.head<2>() + rotation * mount.lever_arm_m, Eigen::Vector2d(std::cos(beam), std::sin(beam)),
+  const SensorAtPose at = SensorAt(pose, mount);
+  const geometry::Cone2 cone{at.position, at.axis,
                              mount.cone_half_angle_rad, max_range_m};
   std::vector<EchoCandidate> candidates;
   // The nearest hit first (a cast that stops at the first surface), then every segment within the
@@ -274,7 +283,7 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
     const geometry::SegmentIndex::Entry& entry = index_.entries()[hit.entry];
     if (std::find(rows_seen.begin(), rows_seen.end(), entry.row) != rows_seen.end()) continue;
     rows_seen.push_back(entry.row);
-    if (auto c = Linearize(hit, entry.segment, shapes_[hit.entry], pose, mount)) candidates.push_back(*c);
+    if (auto c = Linearize(hit, entry.segment, shapes_[hit.entry], pose, mount, at)) candidates.push_back(*c);
   }
   return candidates;
 }

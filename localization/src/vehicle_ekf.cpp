@@ -69,7 +69,6 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
     wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
     steering_gates_.push_back(ChiSquareGate(m, config_.steering.gate_probability));
   }
-  origin_ = origin;
   for (const mapio::SensorMount& sensor : vehicle_.ultrasonic) {
     ultrasonic_mounts_.push_back(
         RangeSensorMount{sensor.position_m.head<2>(), sensor.yaw_rad, config_.map_aided.cone_half_angle_rad});

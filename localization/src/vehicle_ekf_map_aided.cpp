@@ -12,7 +12,7 @@ void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
   if (vehicle_.ultrasonic.empty()) {
     throw std::invalid_argument("row map: the vehicle '" + vehicle_.name + "' has no ultrasonic sensor to use it");
   }
-  ranging_ = std::make_shared<const RowMapRanging>(map, origin_, config_.map_aided.row_smoothing_m);
+  ranging_ = std::make_shared<const RowMapRanging>(map, frame_.origin(), config_.map_aided.row_smoothing_m);
 }
 
 ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {

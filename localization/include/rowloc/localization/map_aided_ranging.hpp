@@ -92,7 +92,6 @@ class RowMapRanging {
     bool start_is_corner = false;   ///< a corner: echoes from that vertex use the point model
     bool end_is_corner = false;
   };
-  const std::vector<EntryShape>& shapes() const { return shapes_; }
 
   /// Segments a beam from `pose` (X, Y, phi) can hit within max_range_m, nearest first: the first
   /// hit and every hit whose range is within window_m of it. Empty: the cone meets no segment.

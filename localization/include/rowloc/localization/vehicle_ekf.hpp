@@ -48,7 +48,7 @@ class FilterInputError : public std::invalid_argument {
 
 struct UpdateRecord {
   double time_s = 0.0;
-  std::string sensor;  ///< "gnss", "imu", "wheels", "steering" or "vio" (the message's sensor name)
+  std::string sensor;  ///< the message's sensor name, or "wheels", "nonholonomic", "steering", "ultrasonic"
   UpdateOutcome outcome;
 };
 
@@ -155,7 +155,6 @@ class VehicleEkf {
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
   std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
   std::vector<std::optional<double>> last_steering_rad_;
-  geometry::GeoOrigin origin_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
