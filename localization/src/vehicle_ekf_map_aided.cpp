@@ -15,14 +15,19 @@ void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
   ranging_ = std::make_shared<const RowMapRanging>(map, frame_.origin(), config_.map_aided.row_smoothing_m);
 }
 
+std::optional<std::size_t> VehicleEkf::UltrasonicIndex(const std::string& name) const {
+  const auto it = std::find_if(vehicle_.ultrasonic.begin(), vehicle_.ultrasonic.end(),
+                               [&](const mapio::SensorMount& m) { return m.name == name; });
+  if (it == vehicle_.ultrasonic.end()) return std::nullopt;
+  return static_cast<std::size_t>(it - vehicle_.ultrasonic.begin());
+}
+
 ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   ProcessResult result;
   if (!ranging_ || !initialised_ || !ping.range_m) return result;  // no echo: no measurement
   MapAidedStats& stats = map_aided_stats_;
   ++stats.echoes;
-  const auto named = std::find_if(vehicle_.ultrasonic.begin(), vehicle_.ultrasonic.end(),
-                                  [&](const mapio::SensorMount& m) { return m.name == ping.sensor; });
-  const RangeSensorMount& mount = ultrasonic_mounts_[static_cast<std::size_t>(named - vehicle_.ultrasonic.begin())];
+  const RangeSensorMount& mount = ultrasonic_mounts_[*UltrasonicIndex(ping.sensor)];  // checked by Validate
   const MapAidedConfig& config = config_.map_aided;
   const Eigen::Vector3d pose = x_.head<3>();
   const Eigen::Matrix3d pose_covariance = p_.topLeftCorner<3, 3>();

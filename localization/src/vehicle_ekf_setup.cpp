@@ -86,10 +86,7 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     RequireSigma(message, vio->sigma_mps, "sigma_mps");
   } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message)) {
     if (ping->range_m) RequirePositive(message, *ping->range_m, "range_m");
-    const auto& mounts = vehicle_.ultrasonic;
-    const bool known = std::any_of(mounts.begin(), mounts.end(),
-                                   [&](const mapio::SensorMount& m) { return m.name == ping->sensor; });
-    if (ranging_ && !known) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    if (ranging_ && !UltrasonicIndex(ping->sensor)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
   }
 }
 
