@@ -292,15 +292,22 @@ std::optional<SegmentIndex::Hit> SegmentIndex::ConeCast(const Cone2& cone) const
   return impl_->NearestHit(sector, [&](const Segment2& s) { return sector.Cast(s); });
 }
 
-std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone) const {
+std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone) const { return ConeCastAll(cone, 0.0); }
+
+std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone, double min_range_m) const {
+  if (!(min_range_m >= 0.0 && std::isfinite(min_range_m))) {
+    throw std::invalid_argument("SegmentIndex::ConeCastAll: min_range_m must be finite and >= 0");
+  }
   const PreparedCone sector(cone);
   std::vector<Hit> hits;
   if (impl_->entries.empty()) return hits;
   const double reach_m = std::min(sector.cone().max_range_m, impl_->CoverRadius(sector.cone().apex));
+  if (min_range_m > reach_m) return hits;
   const SectorHalfPlanes half_planes(sector);
-  impl_->VisitCandidates(PieceBox(sector, 0.0, reach_m), [&](const Segment2& s, std::size_t entry) {
+  impl_->VisitCandidates(PieceBox(sector, min_range_m, reach_m), [&](const Segment2& s, std::size_t entry) {
     if (!half_planes.MayMeet(s)) return;
-    if (const std::optional<RayHit> hit = sector.Cast(s)) hits.push_back(Hit{*hit, entry});
+    const std::optional<RayHit> hit = sector.Cast(s);
+    if (hit && hit->range_m >= min_range_m) hits.push_back(Hit{*hit, entry});
   });
   std::sort(hits.begin(), hits.end(), HitOrder);
   return hits;

@@ -13,6 +13,7 @@
 namespace rowloc::localization {
 
 double WrapAngle(double angle_rad) {
+  if (angle_rad > -std::numbers::pi && angle_rad <= std::numbers::pi) return angle_rad;  // the usual case
   double wrapped = std::remainder(angle_rad, 2.0 * std::numbers::pi);  // in [-pi, pi]
   if (wrapped <= -std::numbers::pi) wrapped += 2.0 * std::numbers::pi;
   return wrapped;
@@ -47,6 +48,15 @@ Tall TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h) {
   return out;
 }
 
+/// The strictly lower triangle of p set from the upper one: p exactly symmetric.
+void MirrorUpperTriangle(Eigen::MatrixXd& p) {
+  const Eigen::Index n = p.rows();
+  for (Eigen::Index col = 0; col < n; ++col) {
+    double* target = p.col(col).data();
+    for (Eigen::Index row = col + 1; row < n; ++row) target[row] = p(col, row);
+  }
+}
+
 /// p <- p - u v^T on the upper triangle (row <= col), then the lower triangle mirrored from it:
 /// for a symmetric result, exactly symmetric, at half the cost.
 template <typename Wide>
@@ -60,9 +70,7 @@ void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Wide& u, const Wide& v) {
       for (Eigen::Index r = 0; r <= col; ++r) target[r] -= factor * source[r];
     }
   }
-  for (Eigen::Index col = 0; col < n; ++col) {
-    for (Eigen::Index row = col + 1; row < n; ++row) p(row, col) = p(col, row);
-  }
+  MirrorUpperTriangle(p);
 }
 
 /// The update with temporaries of type Tall (n x m), Wide (n x 2m) and Square (m x m): bounded
@@ -110,6 +118,49 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   return outcome;
 }
 
+/// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is
+/// nothing to factorize. With u = P h^T, k = u / s and w = u - k s (zero up to round-off), the
+/// Joseph form P - k u^T - w k^T is the symmetric P - s k k^T - (k w^T + w k^T), computed once per
+/// pair of entries. Vector: an n-vector type.
+template <typename Vector>
+UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Eigen::VectorXd& innovation,
+                               const Eigen::MatrixXd& jacobian, double noise, double gate_threshold, int angle_index) {
+  const Eigen::Index n = state.size();
+  UpdateOutcome outcome;
+  outcome.innovation = innovation;
+  Vector u = Vector::Zero(n);  // P h^T, from the non-zero entries of h
+  double hu = 0.0;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (jacobian(0, j) != 0.0) u.noalias() += jacobian(0, j) * covariance.col(j);
+  }
+  for (Eigen::Index j = 0; j < n; ++j) hu += jacobian(0, j) * u(j);
+  const double s = hu + noise;
+  outcome.innovation_covariance = Eigen::MatrixXd::Constant(1, 1, s);
+  if (!(s > 0.0)) {
+    outcome.nis = std::numeric_limits<double>::infinity();
+    return outcome;  // S not positive: never apply such an update
+  }
+  const double y = innovation(0);
+  outcome.nis = y * y / s;
+  if (!(outcome.nis <= gate_threshold)) return outcome;
+  const Vector gain = u / s;
+  state.noalias() += y * gain;
+  if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
+  const Vector w = u - s * gain;
+  // Each pair (r, c), r <= c, computed once and written to both triangles: P exactly symmetric.
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double sk = s * gain(c), kc = gain(c), wc = w(c);
+    double* column = covariance.col(c).data();
+    for (Eigen::Index r = 0; r <= c; ++r) {
+      const double value = column[r] - (sk * gain(r) + (gain(r) * wc + w(r) * kc));
+      column[r] = value;
+      covariance(c, r) = value;
+    }
+  }
+  outcome.accepted = true;
+  return outcome;
+}
+
 /// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 21).
 constexpr int kStackStates = 32;
 constexpr int kStackMeasurements = 8;
@@ -129,6 +180,14 @@ UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
   if (angle_index >= n) throw std::invalid_argument("Kalman update: angle_index outside the state");
   if (!innovation.allFinite() || !jacobian.allFinite() || !noise.allFinite()) {
     throw std::invalid_argument("Kalman update: non-finite innovation, Jacobian or noise");
+  }
+  if (m == 1) {
+    if (n <= kStackStates) {
+      return ScalarUpdateWith<Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kStackStates, 1>>(
+          state, covariance, innovation, jacobian, noise(0, 0), gate_threshold, angle_index);
+    }
+    return ScalarUpdateWith<Eigen::VectorXd>(state, covariance, innovation, jacobian, noise(0, 0), gate_threshold,
+                                             angle_index);
   }
   if (n <= kStackStates && m <= kStackMeasurements) {
     using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;

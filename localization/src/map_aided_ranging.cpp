@@ -264,14 +264,15 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
                              mount.cone_half_angle_rad, max_range_m};
   std::vector<EchoCandidate> candidates;
   // The nearest hit first (a cast that stops at the first surface), then every segment within the
-  // window behind it: a short sector, so the second query touches a few segments only.
+  // window behind it: the piece of the sector between the two ranges, a few segments only.
   const std::optional<geometry::SegmentIndex::Hit> first = index_.ConeCast(cone);
   if (!first) return candidates;
   std::vector<geometry::SegmentIndex::Hit> hits{*first};
   if (window_m > 0.0) {
     geometry::Cone2 behind = cone;
     behind.max_range_m = std::min(max_range_m, first->hit.range_m + window_m);
-    hits = index_.ConeCastAll(behind);
+    hits = index_.ConeCastAll(behind, first->hit.range_m);
+    if (hits.empty() || hits.front().entry != first->entry) hits.insert(hits.begin(), *first);  // rounding
   }
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);

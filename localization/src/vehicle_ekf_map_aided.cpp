@@ -15,7 +15,8 @@ void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
   ranging_ = std::make_shared<const RowMapRanging>(map, frame_.origin(), config_.map_aided.row_smoothing_m);
 }
 
-std::optional<std::size_t> VehicleEkf::UltrasonicIndex(const std::string& name) const {
+std::optional<std::size_t> VehicleEkf::UltrasonicIndex(const std::string& name, std::size_t hint) const {
+  if (hint < vehicle_.ultrasonic.size() && vehicle_.ultrasonic[hint].name == name) return hint;
   const auto it = std::find_if(vehicle_.ultrasonic.begin(), vehicle_.ultrasonic.end(),
                                [&](const mapio::SensorMount& m) { return m.name == name; });
   if (it == vehicle_.ultrasonic.end()) return std::nullopt;
@@ -27,7 +28,7 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   if (!ranging_ || !initialised_ || !ping.range_m) return result;  // no echo: no measurement
   MapAidedStats& stats = map_aided_stats_;
   ++stats.echoes;
-  const RangeSensorMount& mount = ultrasonic_mounts_[*UltrasonicIndex(ping.sensor)];  // checked by Validate
+  const RangeSensorMount& mount = ultrasonic_mounts_[*UltrasonicIndex(ping.sensor, ping.sensor_index)];  // checked by Validate
   const MapAidedConfig& config = config_.map_aided;
   const Eigen::Vector3d pose = x_.head<3>();
   const Eigen::Matrix3d pose_covariance = p_.topLeftCorner<3, 3>();

@@ -86,7 +86,7 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     RequireSigma(message, vio->sigma_mps, "sigma_mps");
   } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message)) {
     if (ping->range_m) RequirePositive(message, *ping->range_m, "range_m");
-    if (ranging_ && !UltrasonicIndex(ping->sensor)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    if (ranging_ && !UltrasonicIndex(ping->sensor, ping->sensor_index)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
   }
 }
 

@@ -187,6 +187,39 @@ TEST_F(RandomMap, ConeCastAllMatchesBruteForce) {
   EXPECT_GT(touched_total, 4u * kQueryScale);
 }
 
+TEST_F(RandomMap, ConeCastAllFromAMinimumRangeMatchesBruteForce) {
+  std::uniform_real_distribution<double> aperture(0.0, Deg(60.0));
+  std::uniform_real_distribution<double> min_range(0.0, 4.0);
+  std::size_t dropped_total = 0, kept_total = 0;
+  for (int q = 0; q < 4 * kQueryScale; ++q) {
+    const Cone2 cone{{coord_(rng_), coord_(rng_)}, Heading(angle_(rng_)), aperture(rng_), 6.0};
+    const double from_m = min_range(rng_);
+    std::vector<std::size_t> expected;
+    for (const std::size_t entry : BruteConeAll(*entries_, cone)) {
+      if (ConeCast((*entries_)[entry].segment, cone)->range_m >= from_m) {
+        expected.push_back(entry);
+      } else {
+        ++dropped_total;
+      }
+    }
+    std::vector<std::size_t> got;
+    for (const Hit& hit : index_->ConeCastAll(cone, from_m)) {
+      EXPECT_GE(hit.hit.range_m, from_m);
+      got.push_back(hit.entry);
+    }
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, expected) << "cone " << q << " from " << from_m << " m";
+    kept_total += got.size();
+  }
+  EXPECT_GT(dropped_total, 0u);  // the minimum range really removes hits ...
+  EXPECT_GT(kept_total, 0u);     // ... and keeps others
+  const Cone2 cone{{0.0, 0.0}, {1.0, 0.0}, Deg(10.0), 6.0};
+  EXPECT_TRUE(index_->ConeCastAll(cone, 7.0).empty());  // beyond max_range: nothing
+  EXPECT_THROW(index_->ConeCastAll(cone, -0.1), std::invalid_argument);
+  EXPECT_THROW(index_->ConeCastAll(cone, std::nan("")), std::invalid_argument);
+  EXPECT_THROW(index_->ConeCastAll(cone, std::numeric_limits<double>::infinity()), std::invalid_argument);
+}
+
 // ---- vineyards: rows in every direction -------------------------------------------------------
 
 class VineyardHeading : public ::testing::TestWithParam<double> {};

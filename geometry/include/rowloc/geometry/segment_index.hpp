@@ -19,7 +19,8 @@
 //   type-erased iterator allocates and sorts at every node.
 // - ConeCastAll: every segment meeting the sector, with its nearest point, by range (at a polygon
 //   corner both segments are returned). No occlusion: segments behind others are returned too.
-//   One query with the bounding box of the whole sector, the same half-plane filter, exact casts.
+//   One query with the bounding box of the whole sector (or of its piece beyond a minimum range),
+//   the same half-plane filter, exact casts.
 // Nearest uses a second R-tree over the segments themselves (exact point-segment distances); the
 // casts use the bounding-box tree because Boost's segment-box test costs more than the box-box one.
 // The index is immutable; copies share the trees and concurrent const queries are safe.
@@ -75,6 +76,11 @@ class SegmentIndex {
 
   /// Every segment meeting the sector, by range (then entry); errors as ConeCast.
   std::vector<Hit> ConeCastAll(const Cone2& cone) const;
+  /// The same restricted to hits with range >= min_range_m (the query box is then the bounding box
+  /// of the sector's piece [min_range_m, max_range_m] only: a segment's hit is its nearest point in
+  /// the sector, so it lies in that piece). Throws std::invalid_argument for a min_range_m that is
+  /// negative or not finite; errors otherwise as ConeCast.
+  std::vector<Hit> ConeCastAll(const Cone2& cone, double min_range_m) const;
 
  private:
   struct Impl;

@@ -129,8 +129,9 @@ class VehicleEkf {
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
-  /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it.
-  std::optional<std::size_t> UltrasonicIndex(const std::string& name) const;
+  /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it; `hint`
+  /// (the message's index in the log header, usually the vehicle's order) is tried first.
+  std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
