@@ -118,23 +118,50 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   return outcome;
 }
 
+/// u = P h^T for row `row` of the sparse H: the columns of P at the non-zero entries of h.
+template <typename Vector>
+Vector SparseColumn(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& jacobian, Eigen::Index row) {
+  const Eigen::Index n = covariance.rows();
+  Vector u = Vector::Zero(n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const double h = jacobian(row, j);
+    if (h == 0.0) continue;
+    const double* source = covariance.col(j).data();
+    for (Eigen::Index r = 0; r < n; ++r) u(r) += h * source[r];
+  }
+  return u;
+}
+
+/// One scalar correction with u = P h^T and s = h u + r > 0: k = u / s, x <- x + k y and the Joseph
+/// form P - k u^T - w k^T with w = u - k s (zero up to round-off), which is the symmetric
+/// P - s k k^T - (k w^T + w k^T): each pair of entries computed once and written to both triangles,
+/// so P stays exactly symmetric.
+template <typename Vector>
+void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Vector& u, double s, double y) {
+  const Eigen::Index n = state.size();
+  const Vector gain = u / s;
+  state.noalias() += y * gain;
+  const Vector w = u - s * gain;
+  const double* __restrict__ k = gain.data();
+  const double* __restrict__ wv = w.data();
+  double* const data = covariance.data();
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double sk = s * k[c], kc = k[c], wc = wv[c];
+    double* __restrict__ column = data + c * n;
+    for (Eigen::Index r = 0; r <= c; ++r) column[r] -= sk * k[r] + (k[r] * wc + wv[r] * kc);  // upper part
+    for (Eigen::Index r = 0; r < c; ++r) data[r * n + c] = column[r];  // mirrored into row c
+  }
+}
+
 /// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is
-/// nothing to factorize. With u = P h^T, k = u / s and w = u - k s (zero up to round-off), the
-/// Joseph form P - k u^T - w k^T is the symmetric P - s k k^T - (k w^T + w k^T), computed once per
-/// pair of entries. Vector: an n-vector type.
+/// nothing to factorize. Vector: an n-vector type.
 template <typename Vector>
 UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Eigen::VectorXd& innovation,
                                const Eigen::MatrixXd& jacobian, double noise, double gate_threshold, int angle_index) {
-  const Eigen::Index n = state.size();
   UpdateOutcome outcome;
   outcome.innovation = innovation;
-  Vector u = Vector::Zero(n);  // P h^T, from the non-zero entries of h
-  double hu = 0.0;
-  for (Eigen::Index j = 0; j < n; ++j) {
-    if (jacobian(0, j) != 0.0) u.noalias() += jacobian(0, j) * covariance.col(j);
-  }
-  for (Eigen::Index j = 0; j < n; ++j) hu += jacobian(0, j) * u(j);
-  const double s = hu + noise;
+  const Vector u = SparseColumn<Vector>(covariance, jacobian, 0);
+  const double s = jacobian.row(0).dot(u) + noise;
   outcome.innovation_covariance = Eigen::MatrixXd::Constant(1, 1, s);
   if (!(s > 0.0)) {
     outcome.nis = std::numeric_limits<double>::infinity();
@@ -143,22 +170,56 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
   const double y = innovation(0);
   outcome.nis = y * y / s;
   if (!(outcome.nis <= gate_threshold)) return outcome;
-  const Vector gain = u / s;
-  state.noalias() += y * gain;
+  ApplyScalarCorrection(state, covariance, u, s, y);
   if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
-  const Vector w = u - s * gain;
-  // Each pair (r, c), r <= c, computed once and written to both triangles: P exactly symmetric.
-  for (Eigen::Index c = 0; c < n; ++c) {
-    const double sk = s * gain(c), kc = gain(c), wc = w(c);
-    double* column = covariance.col(c).data();
-    for (Eigen::Index r = 0; r <= c; ++r) {
-      const double value = column[r] - (sk * gain(r) + (gain(r) * wc + w(r) * kc));
-      column[r] = value;
-      covariance(c, r) = value;
-    }
-  }
   outcome.accepted = true;
   return outcome;
+}
+
+/// The update of m > 1 measurements with a diagonal R (every R_ii > 0): gated on the joint NIS
+/// (S = H P H^T + R, m x m, Cholesky), then applied as m sequential scalar corrections at the same
+/// linearization point, the i-th with the innovation y_i - h_i (x - x_0) left after the first i - 1.
+/// For a linearized measurement with independent components this equals the joint update
+/// (Bar-Shalom, Li & Kirubarajan 2001, §3.4; Maybeck 1979, §7.4) and costs m scalar O(n^2) updates,
+/// with no m x m solves and no rank-2m temporaries. Tall: n x m; Square: m x m; Vector: n.
+template <typename Tall, typename Square, typename Vector>
+UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
+                                   const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
+                                   const Eigen::MatrixXd& noise, double gate_threshold, int angle_index) {
+  UpdateOutcome outcome;
+  outcome.innovation = innovation;
+  const Tall pht = TimesTransposed<Tall>(covariance, jacobian);  // P H^T (n x m)
+  Square s = noise;
+  s.noalias() += jacobian.lazyProduct(pht);
+  s = (0.5 * (s + s.transpose())).eval();
+  outcome.innovation_covariance = s;
+  const Eigen::LLT<Square> s_factor(s);
+  if (s_factor.info() != Eigen::Success) {
+    outcome.nis = std::numeric_limits<double>::infinity();
+    return outcome;
+  }
+  outcome.nis = innovation.dot(s_factor.solve(innovation));
+  if (!(outcome.nis <= gate_threshold)) return outcome;
+  const Vector start = state;  // the linearization point (not wrapped between the corrections)
+  for (Eigen::Index i = 0; i < innovation.size(); ++i) {
+    const Vector u = i == 0 ? Vector(pht.col(0)) : SparseColumn<Vector>(covariance, jacobian, i);
+    const double s_i = jacobian.row(i).dot(u) + noise(i, i);  // >= R_ii > 0
+    const double y_i = innovation(i) - jacobian.row(i).dot(state - start);
+    ApplyScalarCorrection(state, covariance, u, s_i, y_i);
+  }
+  if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
+  outcome.accepted = true;
+  return outcome;
+}
+
+/// R diagonal with a positive diagonal: its components are independent measurements.
+bool IsPositiveDiagonal(const Eigen::MatrixXd& noise) {
+  for (Eigen::Index c = 0; c < noise.cols(); ++c) {
+    for (Eigen::Index r = 0; r < noise.rows(); ++r) {
+      if (r == c ? !(noise(r, c) > 0.0) : noise(r, c) != 0.0) return false;
+    }
+  }
+  return true;
 }
 
 /// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 21).
@@ -188,6 +249,13 @@ UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
     }
     return ScalarUpdateWith<Eigen::VectorXd>(state, covariance, innovation, jacobian, noise(0, 0), gate_threshold,
                                              angle_index);
+  }
+  if (n <= kStackStates && m <= kStackMeasurements && IsPositiveDiagonal(noise)) {
+    using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;
+    using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackMeasurements, kStackMeasurements>;
+    using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kStackStates, 1>;
+    return SequentialUpdateWith<Tall, Square, Vector>(state, covariance, innovation, jacobian, noise, gate_threshold,
+                                                      angle_index);
   }
   if (n <= kStackStates && m <= kStackMeasurements) {
     using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;

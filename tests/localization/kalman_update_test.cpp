@@ -80,6 +80,32 @@ TEST(KalmanUpdate, EqualsTheTextbookJosephUpdate) {
   }
 }
 
+// A diagonal R takes the sequential path (m scalar corrections at one linearization point): the
+// same result as the joint textbook update (n = 40 is beyond the stack limit: the joint path).
+TEST(KalmanUpdate, DiagonalNoiseEqualsTheTextbookJosephUpdate) {
+  std::mt19937_64 rng(20261201);
+  std::uniform_real_distribution<double> log_scale(-4.0, 1.0);
+  for (const Eigen::Index n : {3, 9, 14, 23, 40}) {
+    for (Eigen::Index m = 2; m <= 8; ++m) {
+      Problem pr = RandomProblem(n, m, rng);
+      pr.r = Eigen::MatrixXd::Zero(m, m);
+      for (Eigen::Index i = 0; i < m; ++i) pr.r(i, i) = std::pow(10.0, log_scale(rng));
+      const Eigen::MatrixXd s = pr.h * pr.p * pr.h.transpose() + pr.r;
+      const Eigen::MatrixXd k = pr.p * pr.h.transpose() * s.inverse();
+      const Eigen::MatrixXd i_kh = Eigen::MatrixXd::Identity(n, n) - k * pr.h;
+      const Eigen::MatrixXd p_expected = i_kh * pr.p * i_kh.transpose() + k * pr.r * k.transpose();
+      Eigen::VectorXd x = pr.x;
+      Eigen::MatrixXd p = pr.p;
+      const UpdateOutcome out = KalmanUpdate(x, p, pr.y, pr.h, pr.r, kInf, -1);
+      ASSERT_TRUE(out.accepted) << "n " << n << " m " << m;
+      EXPECT_LT(RelativeError(x, pr.x + k * pr.y), 1e-10) << "n " << n << " m " << m;
+      EXPECT_LT(RelativeError(p, p_expected), 1e-10) << "n " << n << " m " << m;
+      EXPECT_TRUE(BitIdentical(p, p.transpose())) << "n " << n << " m " << m;
+      EXPECT_NEAR(out.nis, pr.y.dot(s.inverse() * pr.y), 1e-10 * out.nis) << "n " << n << " m " << m;
+    }
+  }
+}
+
 TEST(KalmanUpdate, PosteriorIsSymmetricPositiveDefiniteWithNoLargerTrace) {
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> log_scale(-6.0, 2.0);
