@@ -32,6 +32,16 @@ std::string Band(const ChiSquareBand& b, int precision) {
   return out;
 }
 
+/// The batch-means columns of a consistency summary: interval, whether it holds the expected
+/// value, correlation time and effective samples (batch_means.hpp).
+std::vector<std::string> CorrelatedColumns(const ConsistencySummary& c) {
+  if (!c.batch_means) return {"-", "-", Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
+  return {Band(ChiSquareBand{c.batch_means->lower, c.batch_means->upper}, 3), c.expected_inside ? "yes" : "NO",
+          Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
+}
+const std::vector<std::string> kCorrelatedHeader = {"batch-means 95 % interval", "holds dof", "corr. time [samples]",
+                                                    "effective samples"};
+
 /// A table with a left-aligned first column and right-aligned others.
 class TextTable {
  public:
@@ -96,7 +106,16 @@ std::string NeesSection(const EvaluationResult& r) {
                "samples inside 95 %"});
   t.Add({"position+heading", std::to_string(n.count), Num(dof, 2), Num(n.mean, 3), Band(n.band, 3),
          n.mean_inside ? "yes" : "NO", Percent(n.fraction_inside)});
-  return "Normalized estimation error squared (chi-square test)\n" + t.Format() + singular;
+  std::vector<std::string> header = {"NEES"};
+  header.insert(header.end(), kCorrelatedHeader.begin(), kCorrelatedHeader.end());
+  TextTable correlated(header);
+  std::vector<std::string> row = {"position+heading"};
+  const std::vector<std::string> columns = CorrelatedColumns(n);
+  row.insert(row.end(), columns.begin(), columns.end());
+  correlated.Add(row);
+  return "Normalized estimation error squared (chi-square test)\n" + t.Format() + singular +
+         "The band of the mean assumes independent samples; with correlated ones (batch means, 20 batches):\n" +
+         correlated.Format();
 }
 
 std::string NisSection(const EvaluationResult& r) {
@@ -112,9 +131,20 @@ std::string NisSection(const EvaluationResult& r) {
            std::to_string(s.nis_mismatch_count), white ? Percent(s.whiteness.fraction_inside) : "-",
            std::to_string(s.whiteness.sample_count), white ? Num(s.whiteness.band_half_width, 4) : "-"});
   }
+  std::vector<std::string> header = {"sensor"};
+  header.insert(header.end(), kCorrelatedHeader.begin(), kCorrelatedHeader.end());
+  TextTable correlated(header);
+  for (const SensorInnovationResult& s : r.innovations) {
+    if (s.nis.count == 0) continue;
+    std::vector<std::string> row = {s.sensor};
+    const std::vector<std::string> columns = CorrelatedColumns(s.nis);
+    row.insert(row.end(), columns.begin(), columns.end());
+    correlated.Add(row);
+  }
   std::string out =
       "Innovations per sensor (accepted updates; whiteness: lags 1.." + std::to_string(r.options.max_lag) +
-      " inside +-1.96/sqrt(K m), seed 004 Eq. 42)\n" + t.Format();
+      " inside +-1.96/sqrt(K m), seed 004 Eq. 42)\n" + t.Format() +
+      "Mean NIS with correlated samples (batch means, 20 batches):\n" + correlated.Format();
   for (const SensorInnovationResult& s : r.innovations) {
     if (!s.whiteness.not_computed.empty()) out += "  " + s.sensor + ": whiteness not computed: " + s.whiteness.not_computed + "\n";
     if (s.nis_mismatch_count > 0) {
@@ -154,9 +184,21 @@ json StatsJson(const ErrorStatistics& s) {
 }
 
 json ConsistencyJson(const ConsistencySummary& c) {
-  return {{"count", c.count},         {"total_dof", c.total_dof},       {"mean", c.mean},
-          {"band_lower", c.band.lower}, {"band_upper", c.band.upper},   {"mean_inside", c.mean_inside},
-          {"fraction_inside", c.fraction_inside}, {"probability", c.probability}};
+  json out = {{"count", c.count},         {"total_dof", c.total_dof},       {"mean", c.mean},
+              {"band_lower", c.band.lower}, {"band_upper", c.band.upper},   {"mean_inside", c.mean_inside},
+              {"fraction_inside", c.fraction_inside}, {"probability", c.probability},
+              {"correlation_time_samples", c.correlation_time_samples},
+              {"effective_sample_count", c.effective_sample_count}};
+  if (c.batch_means) {
+    const BatchMeansInterval& b = *c.batch_means;
+    out["batch_means"] = {{"batches", b.batch_count},
+                          {"batch_length", b.batch_length},
+                          {"lower", b.lower},
+                          {"upper", b.upper},
+                          {"batch_lag1_autocorrelation", b.batch_lag1_autocorrelation},
+                          {"expected_inside", c.expected_inside}};
+  }
+  return out;
 }
 
 json InnovationsJson(const std::vector<SensorInnovationResult>& sensors) {

@@ -98,6 +98,27 @@ TEST(ReportJson, CarriesTheNumbers) {
   EXPECT_DOUBLE_EQ(j.at("drift").at(0).at("start_s").get<double>(), 8.0);
   EXPECT_DOUBLE_EQ(j.at("drift").at(0).at("end_s").get<double>(), 15.0);
   EXPECT_EQ(j.at("slip").size(), 2u);
+  EXPECT_FALSE(j.at("nees").contains("batch_means"));  // 21 samples: fewer than 2 per batch
+}
+
+TEST(ReportJson, CarriesTheBatchMeansIntervalOfCorrelatedSamples) {
+  EvaluationResult r;
+  std::vector<double> nees;
+  for (int k = 0; k < 100; ++k) nees.push_back(k % 10 < 5 ? 1.0 : 5.0);  // mean 3, correlated over 5 samples
+  r.nees = SummarizeConsistency(nees, std::vector<int>(nees.size(), 3));
+  ASSERT_TRUE(r.nees.batch_means.has_value());
+  const auto j = nlohmann::json::parse(FormatReportJson(r, {}));
+  const auto& b = j.at("nees").at("batch_means");
+  EXPECT_EQ(b.at("batches").get<std::size_t>(), 20u);
+  EXPECT_EQ(b.at("batch_length").get<std::size_t>(), 5u);
+  EXPECT_DOUBLE_EQ(b.at("lower").get<double>(), r.nees.batch_means->lower);
+  EXPECT_DOUBLE_EQ(b.at("upper").get<double>(), r.nees.batch_means->upper);
+  EXPECT_TRUE(b.at("expected_inside").get<bool>());
+  EXPECT_GT(j.at("nees").at("correlation_time_samples").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j.at("nees").at("effective_sample_count").get<double>(), r.nees.effective_sample_count);
+  const std::string text = FormatReportText(r, {});
+  EXPECT_THAT(text, HasSubstr("batch-means 95 % interval"));
+  EXPECT_THAT(text, HasSubstr("holds dof"));
 }
 
 TEST(ReportFiles, WritesTextAndJson) {

@@ -5,7 +5,6 @@
 #include "statistical_tests.hpp"
 
 #include <Eigen/Cholesky>
-#include <boost/math/distributions/binomial.hpp>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -43,15 +42,6 @@ TruthStream StraightTruth(int n) {
   t.source_name = "truth";
   for (int i = 0; i < n; ++i) t.samples.push_back(Truth(i, i, 0.0, 0.0));
   return t;
-}
-
-/// Accepts n successes out of trials if inside the two-sided binomial interval of level 1 - alpha.
-void ExpectBinomialFrequency(std::size_t successes, std::size_t trials, double p) {
-  const boost::math::binomial dist(static_cast<double>(trials), p);
-  const double lo = boost::math::quantile(dist, test::kStatisticalAlpha / 2.0);
-  const double hi = boost::math::quantile(boost::math::complement(dist, test::kStatisticalAlpha / 2.0));
-  EXPECT_GE(static_cast<double>(successes), lo) << successes << " of " << trials;
-  EXPECT_LE(static_cast<double>(successes), hi) << successes << " of " << trials;
 }
 
 TEST(WrapAngle, WrapsIntoHalfOpenInterval) {
@@ -254,7 +244,7 @@ TEST(NeesProperty, EstimatesDrawnFromTheirCovarianceAreConsistent) {
   ASSERT_EQ(r.nees.count, static_cast<std::size_t>(n));
   EXPECT_DOUBLE_EQ(r.nees.total_dof, 3.0 * n);
   // Per-sample interval: Binomial(n, 0.95) samples inside.
-  ExpectBinomialFrequency(static_cast<std::size_t>(std::lround(r.nees.fraction_inside * n)), n, 0.95);
+  test::ExpectBinomialFrequency(static_cast<std::size_t>(std::lround(r.nees.fraction_inside * n)), n, 0.95);
   // Chi-square goodness of fit of the NEES against chi2(3) in 10 equiprobable bins.
   const boost::math::chi_squared chi3(3.0);
   std::vector<double> counts(10, 0.0);
@@ -272,7 +262,7 @@ TEST(NeesProperty, EstimatesDrawnFromTheirCovarianceAreConsistent) {
     for (std::size_t k = 0; k < values.size(); ++k) values[k] = *r.pose_errors[run * values.size() + k].nees;
     if (SummarizeConsistency(values, std::vector<int>(values.size(), 3)).mean_inside) ++runs_inside;
   }
-  ExpectBinomialFrequency(runs_inside, runs, 0.95);
+  test::ExpectBinomialFrequency(runs_inside, runs, 0.95);
   // And an overconfident filter (covariance 4x too small) fails the band.
   for (EstimateSample& e : est.estimates) e.covariance = p / 4.0;
   EXPECT_FALSE(Evaluate(truth, est, options).nees.mean_inside);
@@ -308,7 +298,7 @@ TEST(WhitenessProperty, WhiteNoiseStaysInTheBandAndARandomWalkDoesNot) {
     inside += static_cast<std::size_t>(std::lround(r.fraction_inside * 50.0));
     lags += 50;
   }
-  ExpectBinomialFrequency(inside, lags, 0.95);
+  test::ExpectBinomialFrequency(inside, lags, 0.95);
   std::vector<Eigen::VectorXd> ar;
   double x = 0.0;
   for (int k = 0; k < 1000; ++k) {

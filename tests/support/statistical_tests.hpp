@@ -1,11 +1,13 @@
 // Statistical assertions shared by the simulator's noise-model tests.
 #pragma once
 
+#include <boost/math/distributions/binomial.hpp>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace rowloc::test {
@@ -27,6 +29,16 @@ inline void ExpectZeroMeanWithSigma(const std::vector<double>& samples, double s
   EXPECT_LT(statistic, boost::math::quantile(chi2, 1.0 - kStatisticalAlpha / 2.0)) << "sigma " << sigma;
   const double z = boost::math::quantile(boost::math::normal(), 1.0 - kStatisticalAlpha / 2.0);
   EXPECT_LT(std::abs(mean), z * sigma / std::sqrt(n)) << "sigma " << sigma;
+}
+
+/// Two-sided binomial test that `successes` of `trials` independent events of probability p is
+/// not unusual.
+inline void ExpectBinomialFrequency(std::size_t successes, std::size_t trials, double p) {
+  const boost::math::binomial dist(static_cast<double>(trials), p);
+  const double lo = boost::math::quantile(dist, kStatisticalAlpha / 2.0);
+  const double hi = boost::math::quantile(boost::math::complement(dist, kStatisticalAlpha / 2.0));
+  EXPECT_GE(static_cast<double>(successes), lo) << successes << " of " << trials;
+  EXPECT_LE(static_cast<double>(successes), hi) << successes << " of " << trials;
 }
 
 }  // namespace rowloc::test

@@ -30,6 +30,7 @@
 #pragma once
 
 #include "rowloc/geometry/segment_index.hpp"
+#include "rowloc/sim/batch_means.hpp"
 #include "rowloc/sim/chi_square_bands.hpp"
 #include "rowloc/sim/trajectory_streams.hpp"
 
@@ -119,6 +120,13 @@ struct ConsistencySummary {
   bool mean_inside = false;
   double fraction_inside = 0.0;   ///< samples inside their own per-sample interval
   double probability = 0.95;
+  /// The band above assumes independent samples; a filter's NEES/NIS is correlated in time
+  /// (batch_means.hpp). The batch-means interval (20 batches) of the expected value, absent with
+  /// fewer than 40 samples; expected_inside: it holds the consistent filter's mean dof.
+  std::optional<BatchMeansInterval> batch_means;
+  bool expected_inside = false;
+  double correlation_time_samples = 1.0;  ///< integrated autocorrelation time tau
+  double effective_sample_count = 0.0;    ///< count / tau
 };
 /// values[k] ~ chi2(dofs[k]) for a consistent filter. Sizes must agree (std::invalid_argument);
 /// an empty input gives count == 0.
