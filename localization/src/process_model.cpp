@@ -85,62 +85,74 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
 
 constexpr int kBase = L::kBaseSize;
 
+/// The rows of f other than the identity's (the states whose step depends on others), each as a
+/// list of its non-zero entries.
+struct CoupledRows {
+  std::size_t count = 0;
+  std::array<int, kBase> state{};                 ///< row of f
+  std::array<std::size_t, kBase + 1> first{};     ///< entries of row k: [first[k], first[k + 1])
+  std::array<int, kBase * kBase> column{};
+  std::array<double, kBase * kBase> factor{};
+
+  explicit CoupledRows(const BaseJacobian& f) {
+    std::size_t entries = 0;
+    for (int i = 0; i < kBase; ++i) {
+      const std::size_t begin = entries;
+      for (int j = 0; j < kBase; ++j) {
+        if (f(i, j) == 0.0) continue;
+        column[entries] = j;
+        factor[entries++] = f(i, j);
+      }
+      if (entries == begin + 1 && column[begin] == i && factor[begin] == 1.0) {  // the identity's row
+        entries = begin;
+        continue;
+      }
+      state[count] = i;
+      first[count++] = begin;
+      first[count] = entries;
+    }
+  }
+  /// sum_j f(state[k], j) v(j) over the non-zero entries.
+  template <typename Vector>
+  double Dot(std::size_t k, const Vector& v) const {
+    double sum = 0.0;
+    for (std::size_t e = first[k]; e < first[k + 1]; ++e) sum += factor[e] * v(column[e]);
+    return sum;
+  }
+};
+
 /// P <- F P F^T for F = diag(f, I) with a sparse f, from the columns c_i = sum_j f(i, j) P.col(j)
-/// of P F^T for the coupled states i (rows of f other than the identity's): since P is symmetric,
-/// row and column i of F P F^T are c_i outside the coupled block, and the block is
-/// B(i, i') = sum_j f(i, j) c_i'(j). O(nnz(f - I) n) on contiguous columns instead of O(9^2 n);
-/// P stays exactly symmetric (the block is averaged with its transpose). Columns: n x up to 9.
+/// of P F^T for the coupled states i: since P is symmetric, row and column i of F P F^T are c_i
+/// outside the coupled block, and the block is B(i, i') = sum_j f(i, j) c_i'(j). O(nnz(f - I) n)
+/// on contiguous columns instead of O(9^2 n); P stays exactly symmetric (the block is averaged with
+/// its transpose). Columns: an n x (up to 9) matrix type.
 template <typename Columns>
 void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
-  // The non-zero entries of the coupled rows of f (at most kBase x kBase).
-  std::array<int, kBase> coupled{}, first{}, last{};
-  std::array<int, kBase * kBase> column{};
-  std::array<double, kBase * kBase> factor{};
-  int count = 0, entries = 0;
-  for (int i = 0; i < kBase; ++i) {
-    const int begin = entries;
-    bool identity = true;
-    for (int j = 0; j < kBase; ++j) {
-      if (f(i, j) == 0.0) continue;
-      identity = identity && j == i && f(i, j) == 1.0;
-      column[static_cast<std::size_t>(entries)] = j;
-      factor[static_cast<std::size_t>(entries++)] = f(i, j);
-    }
-    if (identity) {
-      entries = begin;
-      continue;
-    }
-    coupled[static_cast<std::size_t>(count)] = i;
-    first[static_cast<std::size_t>(count)] = begin;
-    last[static_cast<std::size_t>(count++)] = entries;
-  }
-  const auto a_ = [](int a) { return static_cast<std::size_t>(a); };
+  const CoupledRows rows(f);
+  const auto count = static_cast<Eigen::Index>(rows.count);
   Columns c = Columns::Zero(n, count);
-  for (int a = 0; a < count; ++a) {
-    double* target = c.col(a).data();
-    for (int e = first[a_(a)]; e < last[a_(a)]; ++e) {
-      const double scale = factor[a_(e)];
-      const double* source = p.col(column[a_(e)]).data();
+  for (std::size_t k = 0; k < rows.count; ++k) {
+    double* target = c.col(static_cast<Eigen::Index>(k)).data();
+    for (std::size_t e = rows.first[k]; e < rows.first[k + 1]; ++e) {
+      const double scale = rows.factor[e];
+      const double* source = p.col(rows.column[e]).data();
       for (Eigen::Index r = 0; r < n; ++r) target[r] += scale * source[r];
     }
   }
   Eigen::Matrix<double, kBase, kBase> block;
-  for (int a = 0; a < count; ++a) {
-    for (int b = 0; b < count; ++b) {
-      double sum = 0.0;
-      for (int e = first[a_(a)]; e < last[a_(a)]; ++e) sum += factor[a_(e)] * c(column[a_(e)], b);
-      block(a, b) = sum;
+  for (std::size_t a = 0; a < rows.count; ++a) {
+    for (std::size_t b = 0; b < rows.count; ++b) {
+      block(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = rows.Dot(a, c.col(static_cast<Eigen::Index>(b)));
     }
   }
-  for (int a = 0; a < count; ++a) {
-    const int i = coupled[a_(a)];
-    p.col(i) = c.col(a);
-    p.row(i) = c.col(a).transpose();
+  for (std::size_t k = 0; k < rows.count; ++k) {
+    p.col(rows.state[k]) = c.col(static_cast<Eigen::Index>(k));
+    p.row(rows.state[k]) = c.col(static_cast<Eigen::Index>(k)).transpose();
   }
-  for (int a = 0; a < count; ++a) {
-    for (int b = a; b < count; ++b) {
-      const int i = coupled[a_(a)], k = coupled[a_(b)];
+  for (Eigen::Index a = 0; a < count; ++a) {
+    for (Eigen::Index b = a; b < count; ++b) {
+      const int i = rows.state[static_cast<std::size_t>(a)], k = rows.state[static_cast<std::size_t>(b)];
       p(i, k) = p(k, i) = 0.5 * (block(a, b) + block(b, a));
     }
   }

@@ -149,6 +149,16 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
   EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
 }
 
+TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
+  // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
+  FilterConfig expected;
+  expected.name = "no-side-slip";
+  expected.wheels.lateral_velocity_sigma_mps = 0.002;
+  expected.process_noise.yaw_acceleration_radps2_per_sqrt_hz = 0.1;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("no-side-slip")), expected);
+  EXPECT_EQ(FilterConfig{}.wheels.lateral_velocity_sigma_mps, 0.01);  // the default allows 1 cm/s of side slip
+}
+
 TEST(FilterConfig, EqualityHelperSeesADifference) {
   FilterConfig other;
   other.vio.gate_probability = 0.99;
