@@ -180,8 +180,9 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
 /// (S = H P H^T + R, m x m, Cholesky), then applied as m sequential scalar corrections at the same
 /// linearization point, the i-th with the innovation y_i - h_i (x - x_0) left after the first i - 1.
 /// For a linearized measurement with independent components this equals the joint update
-/// (Bar-Shalom, Li & Kirubarajan 2001, §3.4; Maybeck 1979, §7.4) and costs m scalar O(n^2) updates,
-/// with no m x m solves and no rank-2m temporaries. Tall: n x m; Square: m x m; Vector: n.
+/// (sequential Kalman filtering: Simon, Optimal State Estimation, 2006, §6.1) and costs m scalar
+/// O(n^2) updates, with no m x m solves and no rank-2m temporaries. Tall: n x m; Square: m x m;
+/// Vector: n.
 template <typename Tall, typename Square, typename Vector>
 UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
                                    const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
@@ -222,7 +223,7 @@ bool IsPositiveDiagonal(const Eigen::MatrixXd& noise) {
   return true;
 }
 
-/// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 21).
+/// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 23).
 constexpr int kStackStates = 32;
 constexpr int kStackMeasurements = 8;
 

@@ -11,7 +11,13 @@
 // computed with U = P H^T (skipping the zeros of the sparse H) as the identical
 //   P <- P - K U^T - (U - K S) K^T          (valid for any gain K, like the product form)
 // on the upper triangle only, mirrored to the lower: O(nnz(H) n + m n^2) instead of O(n^3), and P
-// exactly symmetric. The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
+// exactly symmetric. Two cheaper paths give the same result: a scalar measurement (m = 1) needs no
+// factorization; m > 1 components with a diagonal R are gated on the joint NIS above and then
+// applied as m scalar corrections at the same linearization point (sequential Kalman filtering,
+// Simon, Optimal State Estimation, 2006, §6.1), each
+//   k = u / s, u = P h^T, s = h u + r,   P <- P - s k k^T - (k w^T + w k^T),  w = u - k s,
+// the same Joseph identity for m = 1. The heading (state index angle_index) is wrapped to
+// (-pi, pi] after the correction.
 #pragma once
 
 #include <Eigen/Core>
