@@ -35,7 +35,9 @@ std::string Band(const ChiSquareBand& b, int precision) {
 /// The batch-means columns of a consistency summary: interval, whether it holds the expected
 /// value, correlation time and effective samples (batch_means.hpp).
 std::vector<std::string> CorrelatedColumns(const ConsistencySummary& c) {
-  if (!c.batch_means) return {"-", "-", Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
+  if (!c.batch_means) {
+    return {"run too short", "-", Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
+  }
   return {Band(ChiSquareBand{c.batch_means->lower, c.batch_means->upper}, 3), c.expected_inside ? "yes" : "NO",
           Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
 }
@@ -114,7 +116,8 @@ std::string NeesSection(const EvaluationResult& r) {
   row.insert(row.end(), columns.begin(), columns.end());
   correlated.Add(row);
   return "Normalized estimation error squared (chi-square test)\n" + t.Format() + singular +
-         "The band of the mean assumes independent samples; with correlated ones (batch means, 20 batches):\n" +
+         "The band of the mean assumes independent samples; with correlated ones (batch means: up to 20\n"
+         "batches of >= 4 correlation times; \"run too short\": fewer than 5 such batches):\n" +
          correlated.Format();
 }
 
@@ -144,7 +147,7 @@ std::string NisSection(const EvaluationResult& r) {
   std::string out =
       "Innovations per sensor (accepted updates; whiteness: lags 1.." + std::to_string(r.options.max_lag) +
       " inside +-1.96/sqrt(K m), seed 004 Eq. 42)\n" + t.Format() +
-      "Mean NIS with correlated samples (batch means, 20 batches):\n" + correlated.Format();
+      "Mean NIS with correlated samples (batch means: up to 20 batches of >= 4 correlation times):\n" + correlated.Format();
   for (const SensorInnovationResult& s : r.innovations) {
     if (!s.whiteness.not_computed.empty()) out += "  " + s.sensor + ": whiteness not computed: " + s.whiteness.not_computed + "\n";
     if (s.nis_mismatch_count > 0) {

@@ -160,9 +160,13 @@ PositionSummary SummarizePoseErrors(const std::vector<PoseError>& errors) {
   return s;
 }
 
-/// Batches of the batch-means interval: 20 keeps the t quantile near the normal one (2.09) while
-/// a 300 s run at 10 Hz still gives 150-sample batches, long against a 10-20 s correlation time.
-constexpr std::size_t kConsistencyBatches = 20;
+/// Batch-means interval (batch_means.hpp): batches of at least kBatchLengthInTau integrated
+/// autocorrelation times, so that neighbouring batch means are nearly independent (their
+/// correlation is then about 1 / (2 kBatchLengthInTau)), and between kMinBatches and kMaxBatches of
+/// them; a run shorter than kMinBatches such batches is too short for an interval (not reported).
+constexpr double kBatchLengthInTau = 4.0;
+constexpr std::size_t kMinBatches = 5;
+constexpr std::size_t kMaxBatches = 20;
 
 ConsistencySummary SummarizeConsistency(const std::vector<double>& values, const std::vector<int>& dofs,
                                         double probability) {
@@ -182,10 +186,12 @@ ConsistencySummary SummarizeConsistency(const std::vector<double>& values, const
   s.band = TimeAveragedBand(s.total_dof, s.count, probability);
   s.mean_inside = s.band.Contains(s.mean);
   s.fraction_inside = static_cast<double>(inside) / static_cast<double>(s.count);
-  s.batch_means = BatchMeans(values, kConsistencyBatches, probability);
-  s.expected_inside = s.batch_means && s.batch_means->Contains(s.total_dof / static_cast<double>(s.count));
   s.correlation_time_samples = IntegratedAutocorrelationTime(values);
   s.effective_sample_count = static_cast<double>(s.count) / s.correlation_time_samples;
+  const auto batches = static_cast<std::size_t>(
+      std::min(static_cast<double>(kMaxBatches), s.effective_sample_count / kBatchLengthInTau));
+  if (batches >= kMinBatches) s.batch_means = BatchMeans(values, batches, probability);
+  s.expected_inside = s.batch_means && s.batch_means->Contains(s.total_dof / static_cast<double>(s.count));
   return s;
 }
 

@@ -6,6 +6,7 @@
 #include "rowloc/sim/batch_means.hpp"
 
 #include "rowloc/sim/chi_square_bands.hpp"
+#include "rowloc/sim/metrics.hpp"
 #include "statistical_tests.hpp"
 
 #include <gtest/gtest.h>
@@ -98,6 +99,27 @@ TEST(BatchMeans, ExcludesTheExpectedValueOfABiasedSequence) {
     if (!r->Contains(3.0)) ++excluded;
   }
   EXPECT_GE(excluded, runs * 9 / 10);
+}
+
+// SummarizeConsistency sizes the batches from the correlation time: at least 4 tau per batch,
+// 5-20 batches, none when the run holds fewer than 5 such batches.
+TEST(SummarizeConsistency, BatchesAreAtLeastFourCorrelationTimesLong) {
+  std::mt19937_64 rng(3);
+  const std::vector<double> independent = CorrelatedChiSquare(2000, 0.0, 1.0, rng);
+  const ConsistencySummary a = SummarizeConsistency(independent, std::vector<int>(independent.size(), 3));
+  ASSERT_TRUE(a.batch_means.has_value());
+  EXPECT_EQ(a.batch_means->batch_count, 20u);  // tau ~ 1: the cap
+  const std::vector<double> correlated = CorrelatedChiSquare(8000, 0.995, 1.0, rng);  // tau ~ 200
+  const ConsistencySummary b = SummarizeConsistency(correlated, std::vector<int>(correlated.size(), 3));
+  ASSERT_TRUE(b.batch_means.has_value());
+  EXPECT_GE(static_cast<double>(b.batch_means->batch_length), 4.0 * b.correlation_time_samples);
+  EXPECT_GE(b.batch_means->batch_count, 5u);
+  EXPECT_LT(b.batch_means->batch_count, 20u);
+  const std::vector<double> short_run(correlated.begin(), correlated.begin() + 1000);
+  const ConsistencySummary c = SummarizeConsistency(short_run, std::vector<int>(short_run.size(), 3));
+  EXPECT_FALSE(c.batch_means.has_value());
+  EXPECT_FALSE(c.expected_inside);
+  EXPECT_LT(c.effective_sample_count, 20.0);
 }
 
 TEST(IntegratedAutocorrelationTime, IndependentAndAutoregressiveSequences) {

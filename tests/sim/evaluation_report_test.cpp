@@ -104,21 +104,31 @@ TEST(ReportJson, CarriesTheNumbers) {
 TEST(ReportJson, CarriesTheBatchMeansIntervalOfCorrelatedSamples) {
   EvaluationResult r;
   std::vector<double> nees;
-  for (int k = 0; k < 100; ++k) nees.push_back(k % 10 < 5 ? 1.0 : 5.0);  // mean 3, correlated over 5 samples
+  for (int k = 0; k < 400; ++k) nees.push_back(k % 2 == 0 ? 1.0 : 5.0);  // mean 3, tau 1
   r.nees = SummarizeConsistency(nees, std::vector<int>(nees.size(), 3));
   ASSERT_TRUE(r.nees.batch_means.has_value());
-  const auto j = nlohmann::json::parse(FormatReportJson(r, {}));
+  auto j = nlohmann::json::parse(FormatReportJson(r, {}));
   const auto& b = j.at("nees").at("batch_means");
   EXPECT_EQ(b.at("batches").get<std::size_t>(), 20u);
-  EXPECT_EQ(b.at("batch_length").get<std::size_t>(), 5u);
+  EXPECT_EQ(b.at("batch_length").get<std::size_t>(), 20u);
   EXPECT_DOUBLE_EQ(b.at("lower").get<double>(), r.nees.batch_means->lower);
   EXPECT_DOUBLE_EQ(b.at("upper").get<double>(), r.nees.batch_means->upper);
   EXPECT_TRUE(b.at("expected_inside").get<bool>());
-  EXPECT_GT(j.at("nees").at("correlation_time_samples").get<double>(), 1.0);
-  EXPECT_DOUBLE_EQ(j.at("nees").at("effective_sample_count").get<double>(), r.nees.effective_sample_count);
-  const std::string text = FormatReportText(r, {});
+  EXPECT_DOUBLE_EQ(j.at("nees").at("correlation_time_samples").get<double>(), 1.0);
+  EXPECT_DOUBLE_EQ(j.at("nees").at("effective_sample_count").get<double>(), 400.0);
+  std::string text = FormatReportText(r, {});
   EXPECT_THAT(text, HasSubstr("batch-means 95 % interval"));
   EXPECT_THAT(text, HasSubstr("holds dof"));
+  // Correlated over ~100 samples: 400 samples are too few batches of 4 tau: no interval, said so.
+  nees.clear();
+  for (int k = 0; k < 400; ++k) nees.push_back(k % 200 < 100 ? 1.0 : 5.0);
+  r.nees = SummarizeConsistency(nees, std::vector<int>(nees.size(), 3));
+  EXPECT_GT(r.nees.correlation_time_samples, 50.0);
+  EXPECT_FALSE(r.nees.batch_means.has_value());
+  j = nlohmann::json::parse(FormatReportJson(r, {}));
+  EXPECT_FALSE(j.at("nees").contains("batch_means"));
+  text = FormatReportText(r, {});
+  EXPECT_THAT(text, HasSubstr("too short"));
 }
 
 TEST(ReportFiles, WritesTextAndJson) {

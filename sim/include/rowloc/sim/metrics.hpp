@@ -121,8 +121,10 @@ struct ConsistencySummary {
   double fraction_inside = 0.0;   ///< samples inside their own per-sample interval
   double probability = 0.95;
   /// The band above assumes independent samples; a filter's NEES/NIS is correlated in time
-  /// (batch_means.hpp). The batch-means interval (20 batches) of the expected value, absent with
-  /// fewer than 40 samples; expected_inside: it holds the consistent filter's mean dof.
+  /// (batch_means.hpp). The batch-means interval of the expected value, from min(20, count /
+  /// (4 tau)) batches of at least 4 correlation times each; absent when that is fewer than 5
+  /// batches (the run is too short against its correlation time to test its mean).
+  /// expected_inside: the interval holds the consistent filter's mean dof.
   std::optional<BatchMeansInterval> batch_means;
   bool expected_inside = false;
   double correlation_time_samples = 1.0;  ///< integrated autocorrelation time tau
