@@ -29,22 +29,25 @@ double ChiSquareGate(int dof, double probability) {
 
 namespace {
 
-/// M H^T for a square M (n x n) and a sparse H (m x n): column i is sum_j H(i, j) M.col(j).
-/// Plain loops on contiguous columns (column-major storage): for these sizes Eigen's expression
-/// set-up per column costs more than the arithmetic, and the compiler vectorizes the inner loops.
+/// target += M h_row^T for a square M (n x n) and row `row` of a sparse H: the columns of M at the
+/// non-zero entries of that row. Plain loops on contiguous columns (column-major storage): for these
+/// sizes Eigen's expression set-up per column costs more than the arithmetic, and the compiler
+/// vectorizes the inner loop.
+void AddSparseColumn(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h, Eigen::Index row, double* target) {
+  const Eigen::Index n = m.rows();
+  for (Eigen::Index j = 0; j < h.cols(); ++j) {
+    const double factor = h(row, j);
+    if (factor == 0.0) continue;
+    const double* source = m.col(j).data();
+    for (Eigen::Index r = 0; r < n; ++r) target[r] += factor * source[r];
+  }
+}
+
+/// M H^T (n x m): column i is M h_i^T.
 template <typename Tall>
 Tall TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h) {
-  const Eigen::Index n = m.rows();
-  Tall out = Tall::Zero(n, h.rows());
-  for (Eigen::Index i = 0; i < h.rows(); ++i) {
-    double* target = out.col(i).data();
-    for (Eigen::Index j = 0; j < h.cols(); ++j) {
-      const double factor = h(i, j);
-      if (factor == 0.0) continue;
-      const double* source = m.col(j).data();
-      for (Eigen::Index r = 0; r < n; ++r) target[r] += factor * source[r];
-    }
-  }
+  Tall out = Tall::Zero(m.rows(), h.rows());
+  for (Eigen::Index i = 0; i < h.rows(); ++i) AddSparseColumn(m, h, i, out.col(i).data());
   return out;
 }
 
@@ -118,17 +121,11 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   return outcome;
 }
 
-/// u = P h^T for row `row` of the sparse H: the columns of P at the non-zero entries of h.
+/// u = P h^T for row `row` of the sparse H.
 template <typename Vector>
 Vector SparseColumn(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& jacobian, Eigen::Index row) {
-  const Eigen::Index n = covariance.rows();
-  Vector u = Vector::Zero(n);
-  for (Eigen::Index j = 0; j < n; ++j) {
-    const double h = jacobian(row, j);
-    if (h == 0.0) continue;
-    const double* source = covariance.col(j).data();
-    for (Eigen::Index r = 0; r < n; ++r) u(r) += h * source[r];
-  }
+  Vector u = Vector::Zero(covariance.rows());
+  AddSparseColumn(covariance, jacobian, row, u.data());
   return u;
 }
 

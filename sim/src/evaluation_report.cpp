@@ -33,16 +33,17 @@ std::string Band(const ChiSquareBand& b, int precision) {
 }
 
 /// The batch-means columns of a consistency summary: interval, whether it holds the expected
-/// value, correlation time and effective samples (batch_means.hpp).
-std::vector<std::string> CorrelatedColumns(const ConsistencySummary& c) {
+/// value, correlation time and effective samples (batch_means.hpp), after the row's name.
+std::vector<std::string> CorrelatedRow(const std::string& name, const ConsistencySummary& c) {
   if (!c.batch_means) {
-    return {"run too short", "-", Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
+    return {name, "run too short", "-", Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
   }
-  return {Band(ChiSquareBand{c.batch_means->lower, c.batch_means->upper}, 3), c.expected_inside ? "yes" : "NO",
+  return {name, Band(ChiSquareBand{c.batch_means->lower, c.batch_means->upper}, 3), c.expected_inside ? "yes" : "NO",
           Num(c.correlation_time_samples, 1), Num(c.effective_sample_count, 0)};
 }
-const std::vector<std::string> kCorrelatedHeader = {"batch-means 95 % interval", "holds dof", "corr. time [samples]",
-                                                    "effective samples"};
+std::vector<std::string> CorrelatedHeader(const std::string& name) {
+  return {name, "batch-means 95 % interval", "holds dof", "corr. time [samples]", "effective samples"};
+}
 
 /// A table with a left-aligned first column and right-aligned others.
 class TextTable {
@@ -108,13 +109,8 @@ std::string NeesSection(const EvaluationResult& r) {
                "samples inside 95 %"});
   t.Add({"position+heading", std::to_string(n.count), Num(dof, 2), Num(n.mean, 3), Band(n.band, 3),
          n.mean_inside ? "yes" : "NO", Percent(n.fraction_inside)});
-  std::vector<std::string> header = {"NEES"};
-  header.insert(header.end(), kCorrelatedHeader.begin(), kCorrelatedHeader.end());
-  TextTable correlated(header);
-  std::vector<std::string> row = {"position+heading"};
-  const std::vector<std::string> columns = CorrelatedColumns(n);
-  row.insert(row.end(), columns.begin(), columns.end());
-  correlated.Add(row);
+  TextTable correlated(CorrelatedHeader("NEES"));
+  correlated.Add(CorrelatedRow("position+heading", n));
   return "Normalized estimation error squared (chi-square test)\n" + t.Format() + singular +
          "The band of the mean assumes independent samples; with correlated ones (batch means: up to 20\n"
          "batches of >= 4 correlation times; \"run too short\": fewer than 5 such batches):\n" +
@@ -134,15 +130,9 @@ std::string NisSection(const EvaluationResult& r) {
            std::to_string(s.nis_mismatch_count), white ? Percent(s.whiteness.fraction_inside) : "-",
            std::to_string(s.whiteness.sample_count), white ? Num(s.whiteness.band_half_width, 4) : "-"});
   }
-  std::vector<std::string> header = {"sensor"};
-  header.insert(header.end(), kCorrelatedHeader.begin(), kCorrelatedHeader.end());
-  TextTable correlated(header);
+  TextTable correlated(CorrelatedHeader("sensor"));
   for (const SensorInnovationResult& s : r.innovations) {
-    if (s.nis.count == 0) continue;
-    std::vector<std::string> row = {s.sensor};
-    const std::vector<std::string> columns = CorrelatedColumns(s.nis);
-    row.insert(row.end(), columns.begin(), columns.end());
-    correlated.Add(row);
+    if (s.nis.count > 0) correlated.Add(CorrelatedRow(s.sensor, s.nis));
   }
   std::string out =
       "Innovations per sensor (accepted updates; whiteness: lags 1.." + std::to_string(r.options.max_lag) +
