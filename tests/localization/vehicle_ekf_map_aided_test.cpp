@@ -215,5 +215,22 @@ TEST(VehicleEkfMapAided, EchoesUpdateOnlyAnInitialisedFilterAndNoEchoIsNoMeasure
   EXPECT_EQ(ekf.map_aided_stats().echoes, 2u);
 }
 
+// The message's sensor_index (its position in the log header) is only a hint: a log whose header
+// lists the rangers in another order, or an index beyond the vehicle's, still uses the named ranger.
+TEST(VehicleEkfMapAided, TheRangerIsFoundByNameWhateverTheHeaderIndex) {
+  const mapio::VehicleConfig ugv = mapio::VineyardUgv4wsConfig();
+  VehicleEkf ekf(ugv, FilterConfig{}, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
+  ekf.AttachRowMap(OneRow());
+  ekf.SetPose(1.0, Eigen::Vector3d(10.0, 0.12, 0.0), Eigen::Vector3d(0.01, 0.01, 1e-4).asDiagonal());
+  const ProcessResult wrong_hint = ekf.Process(UltrasonicMessage{1.01, "us_front_right", 0, 0.4});
+  ASSERT_TRUE(wrong_hint.echo.has_value());
+  EXPECT_EQ(wrong_hint.echo->sensor, "us_front_right");
+  EXPECT_EQ(wrong_hint.echo->outcome, "no_segment");  // the right ranger looks away from the row
+  const ProcessResult beyond = ekf.Process(UltrasonicMessage{1.02, "us_front_left", 9, 0.4});
+  ASSERT_EQ(beyond.updates.size(), 1u);
+  EXPECT_TRUE(beyond.updates[0].outcome.accepted);  // the left ranger's geometry: 0.38 m predicted
+  EXPECT_NEAR(beyond.updates[0].outcome.innovation(0), 0.4 - 0.38, 1e-9);
+}
+
 }  // namespace
 }  // namespace rowloc::localization
