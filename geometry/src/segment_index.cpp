@@ -196,30 +196,74 @@ struct SegmentIndex::Impl {
     cast_tree.query(bgi::intersects(box), boost::make_function_output_iterator(each));
   }
 
+  // A segment near a piece of the sector, with its distance from the apex.
+  struct PieceCandidate {
+    double distance_m;
+    Segment2 segment;
+    std::size_t entry;
+  };
+
+  // The segments whose bounding boxes meet the piece of the sector with range in [inner_m, outer_m]
+  // and that may meet the sector, nearest to the apex first (replacing the content of out).
+  template <class Out>
+  void SortedPieceCandidates(const PreparedCone& sector, const SectorHalfPlanes& half_planes, double inner_m,
+                             double outer_m, Out& out) const {
+    const Eigen::Vector2d& apex = sector.cone().apex;
+    out.clear();
+    VisitCandidates(PieceBox(sector, inner_m, outer_m), [&](const Segment2& s, std::size_t entry) {
+      if (half_planes.MayMeet(s)) out.push_back(PieceCandidate{s.Distance(apex), s, entry});
+    });
+    std::sort(out.begin(), out.end(),
+              [](const PieceCandidate& l, const PieceCandidate& r) { return l.distance_m < r.distance_m; });
+  }
+
   // One step of the growing search: the segments near the piece of the sector with range in
   // [inner_m, outer_m], cast nearest first while they can still beat best (or reach limit_m).
   template <class Cast>
   void CastPiece(const PreparedCone& sector, const SectorHalfPlanes& half_planes, double inner_m,
                  double outer_m, double limit_m, Cast& cast, std::optional<Hit>& best) const {
-    struct Candidate {
-      double distance_m;  // from the apex
-      Segment2 segment;
-      std::size_t entry;
-    };
     const Eigen::Vector2d& apex = sector.cone().apex;
-    boost::container::small_vector<Candidate, 16> candidates;
-    VisitCandidates(PieceBox(sector, inner_m, outer_m), [&](const Segment2& s, std::size_t entry) {
-      if (half_planes.MayMeet(s)) candidates.push_back(Candidate{s.Distance(apex), s, entry});
-    });
-    std::sort(candidates.begin(), candidates.end(),
-              [](const Candidate& l, const Candidate& r) { return l.distance_m < r.distance_m; });
-    for (const Candidate& c : candidates) {
+    boost::container::small_vector<PieceCandidate, 16> candidates;
+    SortedPieceCandidates(sector, half_planes, inner_m, outer_m, candidates);
+    for (const PieceCandidate& c : candidates) {
       if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m : limit_m, apex)) return;
       if (const std::optional<RayHit> hit = cast(c.segment)) {
         const Hit candidate{*hit, c.entry};
         if (Better(candidate, best)) best = candidate;
       }
     }
+  }
+
+  // Every hit of cast(segment) with range <= (nearest range) + window_m, into hits (unsorted, no
+  // entry twice), by the growing-radius search of NearestHit: a piece's candidates are cast nearest
+  // first until one is too far to come within the window of the best hit so far, and the search
+  // stops once the window ends inside the pieces searched.
+  template <class Cast>
+  void HitsNearNearest(const PreparedCone& sector, double window_m, Cast&& cast, std::vector<Hit>& hits) const {
+    if (entries.empty()) return;
+    const double limit_m = std::min(sector.cone().max_range_m, CoverRadius(sector.cone().apex));
+    const Eigen::Vector2d& apex = sector.cone().apex;
+    const SectorHalfPlanes half_planes(sector);
+    std::optional<Hit> best;
+    double inner_m = 0.0;
+    boost::container::small_vector<PieceCandidate, 16> candidates;
+    for (double radius_m = initial_radius_m;; radius_m *= 2.0) {
+      const double outer_m = std::min(radius_m, limit_m);
+      SortedPieceCandidates(sector, half_planes, inner_m, outer_m, candidates);
+      for (const PieceCandidate& c : candidates) {
+        if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m + window_m : limit_m, apex)) break;
+        const std::optional<RayHit> hit = cast(c.segment);
+        if (!hit || std::any_of(hits.begin(), hits.end(), [&](const Hit& h) { return h.entry == c.entry; })) continue;
+        hits.push_back(Hit{*hit, c.entry});
+        if (Better(hits.back(), best)) best = hits.back();
+      }
+      if ((best && best->hit.range_m + window_m <= outer_m) || outer_m >= limit_m) break;
+      inner_m = outer_m;
+    }
+    if (!best) return;
+    const double last_m = best->hit.range_m + window_m;
+    hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const Hit& h) { return h.hit.range_m > last_m; }),
+               hits.end());
   }
 
   // Nearest hit of cast(segment) over all entries, by the growing-radius search.
@@ -290,6 +334,17 @@ std::optional<SegmentIndex::Hit> SegmentIndex::RayCast(const Eigen::Vector2d& or
 std::optional<SegmentIndex::Hit> SegmentIndex::ConeCast(const Cone2& cone) const {
   const PreparedCone sector(cone);
   return impl_->NearestHit(sector, [&](const Segment2& s) { return sector.Cast(s); });
+}
+
+std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastNearest(const Cone2& cone, double window_m) const {
+  if (!(window_m >= 0.0)) {
+    throw std::invalid_argument("SegmentIndex::ConeCastNearest: window_m must be >= 0 (not NaN)");
+  }
+  const PreparedCone sector(cone);
+  std::vector<Hit> hits;
+  impl_->HitsNearNearest(sector, window_m, [&](const Segment2& s) { return sector.Cast(s); }, hits);
+  std::sort(hits.begin(), hits.end(), HitOrder);
+  return hits;
 }
 
 std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone) const { return ConeCastAll(cone, 0.0); }

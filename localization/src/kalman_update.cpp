@@ -33,7 +33,7 @@ namespace {
 /// non-zero entries of that row. Plain loops on contiguous columns (column-major storage): for these
 /// sizes Eigen's expression set-up per column costs more than the arithmetic, and the compiler
 /// vectorizes the inner loop.
-void AddSparseColumn(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h, Eigen::Index row, double* target) {
+void AddSparseColumn(const Eigen::MatrixXd& m, const MatrixRef& h, Eigen::Index row, double* target) {
   const Eigen::Index n = m.rows();
   for (Eigen::Index j = 0; j < h.cols(); ++j) {
     const double factor = h(row, j);
@@ -45,7 +45,7 @@ void AddSparseColumn(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h, Eigen::
 
 /// M H^T (n x m): column i is M h_i^T.
 template <typename Tall>
-Tall TimesTransposed(const Eigen::MatrixXd& m, const Eigen::MatrixXd& h) {
+Tall TimesTransposed(const Eigen::MatrixXd& m, const MatrixRef& h) {
   Tall out = Tall::Zero(m.rows(), h.rows());
   for (Eigen::Index i = 0; i < h.rows(); ++i) AddSparseColumn(m, h, i, out.col(i).data());
   return out;
@@ -79,8 +79,8 @@ void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Wide& u, const Wide& v) {
 /// The update with temporaries of type Tall (n x m), Wide (n x 2m) and Square (m x m): bounded
 /// fixed-capacity (stack) matrices for the usual sizes, dynamic ones beyond them.
 template <typename Tall, typename Wide, typename Square>
-UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Eigen::VectorXd& innovation,
-                         const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate_threshold,
+UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const VectorRef& innovation,
+                         const MatrixRef& jacobian, const MatrixRef& noise, double gate_threshold,
                          int angle_index) {
   const Eigen::Index n = state.size();
   const Eigen::Index m = innovation.size();
@@ -123,7 +123,7 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
 
 /// u = P h^T for row `row` of the sparse H.
 template <typename Vector>
-Vector SparseColumn(const Eigen::MatrixXd& covariance, const Eigen::MatrixXd& jacobian, Eigen::Index row) {
+Vector SparseColumn(const Eigen::MatrixXd& covariance, const MatrixRef& jacobian, Eigen::Index row) {
   Vector u = Vector::Zero(covariance.rows());
   AddSparseColumn(covariance, jacobian, row, u.data());
   return u;
@@ -153,8 +153,8 @@ void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, 
 /// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is
 /// nothing to factorize. Vector: an n-vector type.
 template <typename Vector>
-UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Eigen::VectorXd& innovation,
-                               const Eigen::MatrixXd& jacobian, double noise, double gate_threshold, int angle_index) {
+UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const VectorRef& innovation,
+                               const MatrixRef& jacobian, double noise, double gate_threshold, int angle_index) {
   UpdateOutcome outcome;
   outcome.innovation = innovation;
   const Vector u = SparseColumn<Vector>(covariance, jacobian, 0);
@@ -182,8 +182,8 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
 /// Vector: n.
 template <typename Tall, typename Square, typename Vector>
 UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
-                                   const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
-                                   const Eigen::MatrixXd& noise, double gate_threshold, int angle_index) {
+                                   const VectorRef& innovation, const MatrixRef& jacobian,
+                                   const MatrixRef& noise, double gate_threshold, int angle_index) {
   UpdateOutcome outcome;
   outcome.innovation = innovation;
   const Tall pht = TimesTransposed<Tall>(covariance, jacobian);  // P H^T (n x m)
@@ -211,7 +211,7 @@ UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& cova
 }
 
 /// R diagonal with a positive diagonal: its components are independent measurements.
-bool IsPositiveDiagonal(const Eigen::MatrixXd& noise) {
+bool IsPositiveDiagonal(const MatrixRef& noise) {
   for (Eigen::Index c = 0; c < noise.cols(); ++c) {
     for (Eigen::Index r = 0; r < noise.rows(); ++r) {
       if (r == c ? !(noise(r, c) > 0.0) : noise(r, c) != 0.0) return false;
@@ -227,8 +227,8 @@ constexpr int kStackMeasurements = 8;
 }  // namespace
 
 UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
-                           const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
-                           const Eigen::MatrixXd& noise, double gate_threshold, int angle_index) {
+                           const VectorRef& innovation, const MatrixRef& jacobian,
+                           const MatrixRef& noise, double gate_threshold, int angle_index) {
   const Eigen::Index n = state.size();
   const Eigen::Index m = innovation.size();
   if (covariance.rows() != n || covariance.cols() != n || jacobian.rows() != m || jacobian.cols() != n ||

@@ -263,28 +263,16 @@ std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose
   const geometry::Cone2 cone{at.position, at.axis,
                              mount.cone_half_angle_rad, max_range_m};
   std::vector<EchoCandidate> candidates;
-  // The nearest hit first (a cast that stops at the first surface), then every segment within the
-  // window behind it: the piece of the sector between the two ranges, a few segments only.
-  const std::optional<geometry::SegmentIndex::Hit> first = index_.ConeCast(cone);
-  if (!first) return candidates;
-  std::vector<geometry::SegmentIndex::Hit> hits{*first};
-  if (window_m > 0.0) {
-    geometry::Cone2 behind = cone;
-    behind.max_range_m = std::min(max_range_m, first->hit.range_m + window_m);
-    hits = index_.ConeCastAll(behind, first->hit.range_m);
-    if (hits.empty() || hits.front().entry != first->entry) hits.insert(hits.begin(), *first);  // rounding
-  }
+  // The nearest hit and every segment within the window behind it, in one search of the R-tree.
+  const std::vector<geometry::SegmentIndex::Hit> hits = index_.ConeCastNearest(cone, window_m);
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);
   // different rows are alternatives for the data association (a prediction error of a lane).
-  const double last_range = hits.front().hit.range_m + window_m;
-  std::vector<std::size_t> rows_seen;
-  for (const geometry::SegmentIndex::Hit& hit : hits) {
-    if (hit.hit.range_m > last_range) break;
-    const geometry::SegmentIndex::Entry& entry = index_.entries()[hit.entry];
-    if (std::find(rows_seen.begin(), rows_seen.end(), entry.row) != rows_seen.end()) continue;
-    rows_seen.push_back(entry.row);
-    if (auto c = Linearize(hit, entry.segment, shapes_[hit.entry], pose, mount, at)) candidates.push_back(*c);
+  const auto row_of = [&](const geometry::SegmentIndex::Hit& hit) { return index_.entries()[hit.entry].row; };
+  for (auto hit = hits.begin(); hit != hits.end(); ++hit) {
+    const geometry::SegmentIndex::Entry& entry = index_.entries()[hit->entry];
+    if (std::any_of(hits.begin(), hit, [&](const auto& nearer) { return row_of(nearer) == entry.row; })) continue;
+    if (auto c = Linearize(*hit, entry.segment, shapes_[hit->entry], pose, mount, at)) candidates.push_back(*c);
   }
   return candidates;
 }
@@ -313,9 +301,9 @@ MapAidedMeasurement MakeMapAidedMeasurement(const EchoCandidate& candidate, cons
                                             double measured_range_m, const MapAidedConfig& config) {
   if (config.method == MapAidedMethod::kRange) {
     MapAidedMeasurement m;
-    m.innovation = Eigen::VectorXd::Constant(1, measured_range_m - candidate.predicted_range_m);
+    m.innovation.setConstant(1, measured_range_m - candidate.predicted_range_m);
     m.jacobian = candidate.jacobian;
-    m.noise = Eigen::MatrixXd::Constant(1, 1, RangeNoiseVariance(candidate, mount, pose_covariance, config.range_sigma_m));
+    m.noise.setConstant(1, 1, RangeNoiseVariance(candidate, mount, pose_covariance, config.range_sigma_m));
     return m;
   }
   const std::optional<RangeSlab> slab = HeadingWidenedSlab(candidate, mount, pose, std::sqrt(pose_covariance(2, 2)),
@@ -342,10 +330,10 @@ MapAidedMeasurement MakeMapAidedMeasurement(const EchoCandidate& candidate, cons
   const double r = 1.0 / (1.0 / v_post - 1.0 / v_prior);
   const double m_prior = n.dot(p);
   const double z = r * (n.dot(centre) / v_post - m_prior / v_prior);
-  m.innovation = Eigen::VectorXd::Constant(1, z - m_prior);
+  m.innovation.setConstant(1, z - m_prior);
   m.jacobian.resize(1, 3);
   m.jacobian << n.x(), n.y(), 0.0;
-  m.noise = Eigen::MatrixXd::Constant(1, 1, r);
+  m.noise.setConstant(1, 1, r);
   return m;
 }
 

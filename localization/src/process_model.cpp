@@ -83,77 +83,66 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
   }
 }
 
-constexpr int kBase = L::kBaseSize;
-
-/// The rows of f other than the identity's (the states whose step depends on others), each as a
-/// list of its non-zero entries.
-struct CoupledRows {
-  std::size_t count = 0;
-  std::array<int, kBase> state{};                 ///< row of f
-  std::array<std::size_t, kBase + 1> first{};     ///< entries of row k: [first[k], first[k + 1])
-  std::array<int, kBase * kBase> column{};
-  std::array<double, kBase * kBase> factor{};
-
-  explicit CoupledRows(const BaseJacobian& f) {
-    std::size_t entries = 0;
-    for (int i = 0; i < kBase; ++i) {
-      const std::size_t begin = entries;
-      for (int j = 0; j < kBase; ++j) {
-        if (f(i, j) == 0.0) continue;
-        column[entries] = j;
-        factor[entries++] = f(i, j);
-      }
-      if (entries == begin + 1 && column[begin] == i && factor[begin] == 1.0) {  // the identity's row
-        entries = begin;
-        continue;
-      }
-      state[count] = i;
-      first[count++] = begin;
-      first[count] = entries;
-    }
-  }
-  /// sum_j f(state[k], j) v(j) over the non-zero entries.
-  template <typename Vector>
-  double Dot(std::size_t k, const Vector& v) const {
-    double sum = 0.0;
-    for (std::size_t e = first[k]; e < first[k + 1]; ++e) sum += factor[e] * v(column[e]);
-    return sum;
-  }
+/// The rows of F other than the identity's (the states whose step depends on others) and the
+/// columns of their non-zero entries, diagonal included: PropagateState's pattern (an entry of the
+/// pattern may still be zero, e.g. f(vx, vy) = r dt at r = 0).
+struct CoupledRow {
+  int state;
+  int count;
+  std::array<int, 5> columns;
 };
+constexpr std::array<CoupledRow, 5> kCoupledRows{{
+    {L::kX, 5, {L::kX, L::kPhi, L::kVx, L::kVy, L::kYawRate}},
+    {L::kY, 5, {L::kY, L::kPhi, L::kVx, L::kVy, L::kYawRate}},
+    {L::kPhi, 2, {L::kPhi, L::kYawRate, 0, 0, 0}},
+    {L::kVx, 4, {L::kVx, L::kVy, L::kYawRate, L::kAx, 0}},
+    {L::kVy, 4, {L::kVy, L::kVx, L::kYawRate, L::kAy, 0}},
+}};
+constexpr int kCoupled = static_cast<int>(kCoupledRows.size());
 
-/// P <- F P F^T for F = diag(f, I) with a sparse f, from the columns c_i = sum_j f(i, j) P.col(j)
-/// of P F^T for the coupled states i: since P is symmetric, row and column i of F P F^T are c_i
-/// outside the coupled block, and the block is B(i, i') = sum_j f(i, j) c_i'(j). O(nnz(f - I) n)
-/// on contiguous columns instead of O(9^2 n); P stays exactly symmetric (the block is averaged with
-/// its transpose). Columns: an n x (up to 9) matrix type.
+/// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns
+/// c_k = sum_j f(i_k, j) P.col(j) of P F^T for the coupled states i_k: since P is symmetric, row and
+/// column i_k of F P F^T are c_k outside the coupled block, and the block is
+/// B(a, b) = sum_j f(i_a, j) c_b(j), computed for a <= b and written to both triangles (P stays
+/// exactly symmetric). O(nnz(f) n) on contiguous columns instead of O(9^2 n). Columns: an
+/// n x kCoupled matrix type.
 template <typename Columns>
 void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
-  const CoupledRows rows(f);
-  const auto count = static_cast<Eigen::Index>(rows.count);
-  Columns c = Columns::Zero(n, count);
-  for (std::size_t k = 0; k < rows.count; ++k) {
-    double* target = c.col(static_cast<Eigen::Index>(k)).data();
-    for (std::size_t e = rows.first[k]; e < rows.first[k + 1]; ++e) {
-      const double scale = rows.factor[e];
-      const double* source = p.col(rows.column[e]).data();
+  Columns c(n, kCoupled);
+  for (int k = 0; k < kCoupled; ++k) {
+    const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(k)];
+    double* target = c.col(k).data();
+    const double first = f(row.state, row.columns[0]);
+    const double* source = p.col(row.columns[0]).data();
+    for (Eigen::Index r = 0; r < n; ++r) target[r] = first * source[r];
+    for (int e = 1; e < row.count; ++e) {
+      const double scale = f(row.state, row.columns[static_cast<std::size_t>(e)]);
+      source = p.col(row.columns[static_cast<std::size_t>(e)]).data();
       for (Eigen::Index r = 0; r < n; ++r) target[r] += scale * source[r];
     }
   }
-  Eigen::Matrix<double, kBase, kBase> block;
-  for (std::size_t a = 0; a < rows.count; ++a) {
-    for (std::size_t b = 0; b < rows.count; ++b) {
-      block(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = rows.Dot(a, c.col(static_cast<Eigen::Index>(b)));
+  std::array<std::array<double, kCoupled>, kCoupled> block{};
+  for (int a = 0; a < kCoupled; ++a) {
+    const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];
+    for (int b = a; b < kCoupled; ++b) {
+      double sum = 0.0;
+      for (int e = 0; e < row.count; ++e) {
+        const int j = row.columns[static_cast<std::size_t>(e)];
+        sum += f(row.state, j) * c(j, b);
+      }
+      block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] = sum;
     }
   }
-  for (std::size_t k = 0; k < rows.count; ++k) {
-    p.col(rows.state[k]) = c.col(static_cast<Eigen::Index>(k));
-    p.row(rows.state[k]) = c.col(static_cast<Eigen::Index>(k)).transpose();
+  for (int k = 0; k < kCoupled; ++k) {
+    const int i = kCoupledRows[static_cast<std::size_t>(k)].state;
+    p.col(i) = c.col(k);
+    p.row(i) = c.col(k).transpose();
   }
-  for (Eigen::Index a = 0; a < count; ++a) {
-    for (Eigen::Index b = a; b < count; ++b) {
-      const int i = rows.state[static_cast<std::size_t>(a)], k = rows.state[static_cast<std::size_t>(b)];
-      p(i, k) = p(k, i) = 0.5 * (block(a, b) + block(b, a));
+  for (int a = 0; a < kCoupled; ++a) {
+    for (int b = a; b < kCoupled; ++b) {
+      const int i = kCoupledRows[static_cast<std::size_t>(a)].state, k = kCoupledRows[static_cast<std::size_t>(b)].state;
+      p(i, k) = p(k, i) = block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)];
     }
   }
 }
@@ -163,9 +152,9 @@ constexpr int kStackStates = 64;
 
 void Congruence(const BaseJacobian& f, Eigen::MatrixXd& p) {
   if (p.rows() <= kStackStates) {
-    CongruenceWith<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kBase>>(f, p);
+    CongruenceWith<Eigen::Matrix<double, Eigen::Dynamic, kCoupled, 0, kStackStates, kCoupled>>(f, p);
   } else {
-    CongruenceWith<Eigen::MatrixXd>(f, p);
+    CongruenceWith<Eigen::Matrix<double, Eigen::Dynamic, kCoupled>>(f, p);
   }
 }
 

@@ -115,8 +115,8 @@ void VehicleEkf::PredictTo(double t) {
   }
 }
 
-UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const Eigen::VectorXd& innovation,
-                                const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate) {
+UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const VectorRef& innovation,
+                                const MatrixRef& jacobian, const MatrixRef& noise, double gate) {
   UpdateRecord record{t, sensor, KalmanUpdate(x_, p_, innovation, jacobian, noise, gate, L::kPhi)};
   return record;
 }

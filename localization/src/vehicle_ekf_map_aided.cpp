@@ -7,6 +7,20 @@
 #include <stdexcept>
 
 namespace rowloc::localization {
+namespace {
+
+/// States up to which the Jacobian of an echo lives on the stack (the shipped vehicles have <= 23).
+constexpr int kStackStates = 64;
+
+/// The echo's Jacobian over the whole state: m.jacobian in the pose columns, zero elsewhere.
+template <typename Matrix>
+Matrix StateJacobian(const MapAidedMeasurement& m, Eigen::Index states) {
+  Matrix h = Matrix::Zero(m.jacobian.rows(), states);
+  h.template leftCols<3>() = m.jacobian;
+  return h;
+}
+
+}  // namespace
 
 void VehicleEkf::AttachRowMap(const geometry::RowMap& map) {
   if (vehicle_.ultrasonic.empty()) {
@@ -67,11 +81,12 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
     }
     return result;
   }
-  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(m.innovation.size(), x_.size());
-  jacobian.leftCols<3>() = m.jacobian;
   const double gate = m.innovation.size() == 1 ? gate_map_aided_1_ : gate_map_aided_2_;
-  const UpdateRecord& record =
-      result.updates.emplace_back(Update(ping.time_s, "ultrasonic", m.innovation, jacobian, m.noise, gate));
+  using StackJacobian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2, kStackStates>;
+  const UpdateRecord& record = result.updates.emplace_back(
+      x_.size() <= kStackStates
+          ? Update(ping.time_s, "ultrasonic", m.innovation, StateJacobian<StackJacobian>(m, x_.size()), m.noise, gate)
+          : Update(ping.time_s, "ultrasonic", m.innovation, StateJacobian<Eigen::MatrixXd>(m, x_.size()), m.noise, gate));
   trace.outcome = record.outcome.accepted ? "accepted" : "gated";
   trace.posterior_position_m = x_.head<2>();
   trace.posterior_covariance = p_.topLeftCorner<2, 2>();

@@ -220,6 +220,56 @@ TEST_F(RandomMap, ConeCastAllFromAMinimumRangeMatchesBruteForce) {
   EXPECT_THROW(index_->ConeCastAll(cone, std::numeric_limits<double>::infinity()), std::invalid_argument);
 }
 
+TEST_F(RandomMap, ConeCastNearestMatchesBruteForceWindow) {
+  std::uniform_real_distribution<double> aperture(0.0, Deg(60.0));
+  std::uniform_real_distribution<double> window(0.0, 3.0);
+  std::size_t beyond_window = 0, several = 0;
+  for (int q = 0; q < 4 * kQueryScale; ++q) {
+    const Cone2 cone{{coord_(rng_), coord_(rng_)}, Heading(angle_(rng_)), aperture(rng_), q % 2 == 0 ? 6.0 : kInf};
+    const double window_m = q % 7 == 0 ? 0.0 : window(rng_);
+    // Brute force: every hit of the sector, those within window_m of the nearest.
+    std::vector<std::pair<double, std::size_t>> all;
+    for (const std::size_t entry : BruteConeAll(*entries_, cone)) {
+      all.emplace_back(ConeCast((*entries_)[entry].segment, cone)->range_m, entry);
+    }
+    std::sort(all.begin(), all.end());
+    std::vector<std::size_t> expected;
+    for (const auto& [range_m, entry] : all) {
+      if (range_m <= all.front().first + window_m) {
+        expected.push_back(entry);
+      } else {
+        ++beyond_window;
+      }
+    }
+    std::vector<std::size_t> got;
+    const std::vector<Hit> hits = index_->ConeCastNearest(cone, window_m);
+    for (std::size_t i = 0; i < hits.size(); ++i) {
+      got.push_back(hits[i].entry);
+      if (i > 0) {
+        EXPECT_LE(hits[i - 1].hit.range_m, hits[i].hit.range_m);  // by range
+      }
+    }
+    EXPECT_EQ(got, expected) << "cone " << q << " window " << window_m << " m";
+    if (!hits.empty()) {  // the first is ConeCast's hit
+      const std::optional<Hit> nearest = index_->ConeCast(cone);
+      ASSERT_TRUE(nearest.has_value());
+      EXPECT_EQ(hits.front().entry, nearest->entry);
+      EXPECT_EQ(hits.front().hit.range_m, nearest->hit.range_m);
+    }
+    several += got.size() > 1 ? 1 : 0;
+  }
+  EXPECT_GT(beyond_window, 0u);  // the window really removes hits ...
+  EXPECT_GT(several, 0u);        // ... and keeps several in some cones
+  const Cone2 cone{{0.0, 0.0}, {1.0, 0.0}, Deg(10.0), 6.0};
+  EXPECT_THROW(index_->ConeCastNearest(cone, -0.1), std::invalid_argument);
+  EXPECT_THROW(index_->ConeCastNearest(cone, std::nan("")), std::invalid_argument);
+  std::vector<std::size_t> all, unbounded;  // an infinite window: every hit, as ConeCastAll
+  for (const Hit& hit : index_->ConeCastAll(cone)) all.push_back(hit.entry);
+  for (const Hit& hit : index_->ConeCastNearest(cone, kInf)) unbounded.push_back(hit.entry);
+  EXPECT_EQ(unbounded, all);
+  EXPECT_TRUE(SegmentIndex({}).ConeCastNearest(cone, 1.0).empty());  // an empty index
+}
+
 // ---- vineyards: rows in every direction -------------------------------------------------------
 
 class VineyardHeading : public ::testing::TestWithParam<double> {};

@@ -17,6 +17,8 @@
 //   segment is fetched twice unless it straddles two pieces. r0 is twice the mean segment length.
 //   A best-first traversal (Boost's incremental nearest query) measured 1.3-2x slower: its
 //   type-erased iterator allocates and sorts at every node.
+// - ConeCastNearest: the nearest hit and every hit within a window behind it, by the same growing
+//   search, which then stops when the window ends inside the pieces searched.
 // - ConeCastAll: every segment meeting the sector, with its nearest point, by range (at a polygon
 //   corner both segments are returned). No occlusion: segments behind others are returned too.
 //   One query with the bounding box of the whole sector (or of its piece beyond a minimum range),
@@ -73,6 +75,13 @@ class SegmentIndex {
 
   /// Nearest hit in the cone's sector; errors as ConeCast(Segment2, ...).
   std::optional<Hit> ConeCast(const Cone2& cone) const;
+
+  /// The nearest hit in the cone's sector and every other hit with range <= its range + window_m,
+  /// by range (then entry): ConeCastAll restricted to [nearest, nearest + window_m] in one search
+  /// (the growing search of ConeCast, each piece's segments cast until one is too far to come
+  /// within the window; +inf: every hit, as ConeCastAll). Empty when the sector meets no segment.
+  /// Throws std::invalid_argument for a negative or NaN window_m; errors otherwise as ConeCast.
+  std::vector<Hit> ConeCastNearest(const Cone2& cone, double window_m) const;
 
   /// Every segment meeting the sector, by range (then entry); errors as ConeCast.
   std::vector<Hit> ConeCastAll(const Cone2& cone) const;

@@ -24,6 +24,9 @@
 
 namespace rowloc::localization {
 
+using VectorRef = Eigen::Ref<const Eigen::VectorXd>;
+using MatrixRef = Eigen::Ref<const Eigen::MatrixXd>;
+
 struct UpdateOutcome {
   Eigen::VectorXd innovation;             ///< y = z - h(x) (angles wrapped by the caller)
   Eigen::MatrixXd innovation_covariance;  ///< S
@@ -35,9 +38,10 @@ struct UpdateOutcome {
 /// the measurement is rejected (+infinity: never). angle_index < 0: no angle state to wrap.
 /// Throws std::invalid_argument on mismatched sizes, angle_index >= state size or non-finite inputs
 /// (innovation, H, R).
-UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
-                           const Eigen::VectorXd& innovation, const Eigen::MatrixXd& jacobian,
-                           const Eigen::MatrixXd& noise, double gate_threshold, int angle_index);
+/// innovation, jacobian and noise are taken by Eigen::Ref: any contiguous column-major vector or
+/// matrix (dynamic, fixed or bounded size) binds without a copy.
+UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const VectorRef& innovation,
+                           const MatrixRef& jacobian, const MatrixRef& noise, double gate_threshold, int angle_index);
 
 /// The chi-square quantile Q(dof, probability) (Boost.Math), the gate for that probability.
 /// Throws std::invalid_argument for dof < 1 or probability outside (0, 1).

@@ -106,11 +106,12 @@ class RowMapRanging {
   std::vector<EntryShape> shapes_;  ///< per index entry
 };
 
-/// The filter measurement of one echo, in the pose (X, Y, phi) of the state.
+/// The filter measurement of one echo, in the pose (X, Y, phi) of the state. At most 2 rows: the
+/// matrices live in the struct (no heap allocation per echo).
 struct MapAidedMeasurement {
-  Eigen::VectorXd innovation;                          ///< 1 row (range, deprior) or 2 (ellipsoid cut)
-  Eigen::Matrix<double, Eigen::Dynamic, 3> jacobian;   ///< d h / d(X, Y, phi)
-  Eigen::MatrixXd noise;                               ///< R
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 2, 1> innovation;  ///< 1 row (range, deprior) or 2 (ellipsoid cut)
+  Eigen::Matrix<double, Eigen::Dynamic, 3, 0, 2, 3> jacobian;    ///< d h / d(X, Y, phi)
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2, 2> noise;  ///< R
   geometry::CutStatus cut_status = geometry::CutStatus::kUpdated;  ///< cut methods; kUpdated for range
 };
 

@@ -137,8 +137,8 @@ class VehicleEkf {
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
   /// [0.5, 1.5] x nominal; k_s above max(T, 0) + min_slip_gradient_nm (so k_s - T > 0).
   void ProjectStates();
-  UpdateRecord Update(double time_s, const std::string& sensor, const Eigen::VectorXd& innovation,
-                      const Eigen::MatrixXd& jacobian, const Eigen::MatrixXd& noise, double gate);
+  UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
+                      const MatrixRef& jacobian, const MatrixRef& noise, double gate);
 
   mapio::VehicleConfig vehicle_;
   FilterConfig config_;
