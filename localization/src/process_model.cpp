@@ -99,6 +99,13 @@ constexpr std::array<CoupledRow, 5> kCoupledRows{{
     {L::kVy, 4, {L::kVy, L::kVx, L::kYawRate, L::kAy, 0}},
 }};
 constexpr int kCoupled = static_cast<int>(kCoupledRows.size());
+constexpr bool CoupledStatesLeadTheState() {
+  for (int k = 0; k < kCoupled; ++k) {
+    if (kCoupledRows[static_cast<std::size_t>(k)].state != k) return false;
+  }
+  return true;
+}
+static_assert(CoupledStatesLeadTheState(), "CongruenceWith writes the coupled rows and columns as leading blocks");
 
 /// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns
 /// c_k = sum_j f(i_k, j) P.col(j) of P F^T for the coupled states i_k: since P is symmetric, row and
@@ -122,7 +129,7 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
       for (Eigen::Index r = 0; r < n; ++r) target[r] += scale * source[r];
     }
   }
-  std::array<std::array<double, kCoupled>, kCoupled> block{};
+  std::array<std::array<double, kCoupled>, kCoupled> block;  // upper triangle (a <= b) only
   for (int a = 0; a < kCoupled; ++a) {
     const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];
     for (int b = a; b < kCoupled; ++b) {
@@ -134,11 +141,10 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
       block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] = sum;
     }
   }
-  for (int k = 0; k < kCoupled; ++k) {
-    const int i = kCoupledRows[static_cast<std::size_t>(k)].state;
-    p.col(i) = c.col(k);
-    p.row(i) = c.col(k).transpose();
-  }
+  // The coupled states are the first kCoupled (static_assert above): their columns are c, and
+  // their rows, by symmetry, c^T, written column by column (kCoupled contiguous entries each).
+  p.leftCols<kCoupled>() = c;
+  p.topRows<kCoupled>() = c.transpose();
   for (int a = 0; a < kCoupled; ++a) {
     for (int b = a; b < kCoupled; ++b) {
       const int i = kCoupledRows[static_cast<std::size_t>(a)].state, k = kCoupledRows[static_cast<std::size_t>(b)].state;
