@@ -122,7 +122,7 @@ FilterConfig ReadConfig(Reader& root) {
     Reader w = root.Object("wheels");
     c.wheels = {w.Number("speed_sigma_radps"), w.Number("speed_sigma_fraction"),
                 w.Number("lateral_velocity_sigma_mps"), w.Number("gate_probability"),
-                w.Number("max_speed_radps")};
+                w.Number("max_speed_radps"), w.Number("encoder_low_pass_time_constant_s")};
     w.RejectUnknownKeys();
   }
   {
@@ -157,6 +157,10 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
   for (const Rule& rule : Rules(config)) {
     if (rule.probability && !IsProbability(rule.value)) return std::string(rule.key) + " must be in (0, 1)";
     if (!rule.probability && !IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
+  }
+  const double lag_s = config.wheels.encoder_low_pass_time_constant_s;
+  if (!(std::isfinite(lag_s) && lag_s >= 0.0)) {
+    return std::string("wheels.encoder_low_pass_time_constant_s must be finite and >= 0");
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {

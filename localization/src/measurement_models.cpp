@@ -76,16 +76,21 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
 
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
-                                      const std::optional<std::vector<double>>& torque_nm) {
+                                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s) {
   const std::size_t n = vehicle.wheels.size();
   if (torque_nm && torque_nm->size() != n) throw std::invalid_argument("wheel model: one torque per wheel");
+  if (!(std::isfinite(encoder_lag_s) && encoder_lag_s >= 0.0)) {
+    throw std::invalid_argument("wheel model: encoder lag must be finite and >= 0");
+  }
   LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
+  const double tau = encoder_lag_s, r = x(L::kYawRate), vx = x(L::kVx), vy = x(L::kVy);
+  const double ax = x(L::kAx) + r * vy, ay = x(L::kAy) - r * vx;  // d(vx, vy)/dt of the motion model
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
     const WheelCentre w = CentreOf(x, vehicle, layout, i);
     const double c = w.c, s = w.s;
-    const double v = w.longitudinal();
+    const double v = w.longitudinal() - tau * (c * ax + s * ay);  // the speed the encoder reports
     const double radius = WheelRollingRadius(x, vehicle, layout, i);
     double gain = 1.0;  // k / (k - T)
     if (layout.slip_aware()) {
@@ -97,10 +102,16 @@ LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::Veh
     }
     const double dv = gain / radius;  // d h / d v
     m.predicted(row) = v * dv;
-    m.jacobian(row, L::kVx) = dv * c;
-    m.jacobian(row, L::kVy) = dv * s;
-    m.jacobian(row, L::kYawRate) = dv * (-c * l.y() + s * l.x());
-    if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = dv * w.lateral();  // d v / d delta
+    m.jacobian(row, L::kVx) = dv * (c + tau * s * r);
+    m.jacobian(row, L::kVy) = dv * (s - tau * c * r);
+    m.jacobian(row, L::kYawRate) = dv * ((-c * l.y() + s * l.x()) - tau * (c * vy - s * vx));
+    if (tau > 0.0) {
+      m.jacobian(row, L::kAx) = -dv * tau * c;
+      m.jacobian(row, L::kAy) = -dv * tau * s;
+    }
+    if (layout.steering[i] >= 0) {  // d v / d delta
+      m.jacobian(row, layout.steering[i]) = dv * (w.lateral() - tau * (-s * ax + c * ay));
+    }
   }
   return m;
 }

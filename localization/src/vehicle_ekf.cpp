@@ -179,7 +179,8 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
   ProjectStates();  // k_s above the new torque before linearizing k / (k - T)
-  const LinearizedMeasurement h = WheelSpeedModel(x_, vehicle_, layout_, torque);
+  const LinearizedMeasurement h =
+      WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s);
   const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(last_speed_radps_.data(), static_cast<Eigen::Index>(n));
   const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
   const Eigen::VectorXd variance = (s * s + (f * z.array()).square()).matrix();

@@ -71,6 +71,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.wheels.lateral_velocity_sigma_mps, b.wheels.lateral_velocity_sigma_mps);
   EXPECT_EQ(a.wheels.gate_probability, b.wheels.gate_probability);
   EXPECT_EQ(a.wheels.max_speed_radps, b.wheels.max_speed_radps);
+  EXPECT_EQ(a.wheels.encoder_low_pass_time_constant_s, b.wheels.encoder_low_pass_time_constant_s);
   EXPECT_EQ(a.steering.angle_sigma_rad, b.steering.angle_sigma_rad);
   EXPECT_EQ(a.steering.gate_probability, b.steering.gate_probability);
   EXPECT_EQ(a.vio.position_m, b.vio.position_m);
@@ -168,7 +169,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 51u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 52u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -239,6 +240,7 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();
   for (const auto& [path, pointer] : Leaves(base)) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
+    if (path == "wheels.encoder_low_pass_time_constant_s") continue;  // 0 is valid (no filter): below
     const bool probability = path.ends_with("gate_probability");
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
@@ -263,6 +265,17 @@ TEST(FilterConfig, MapAidedMethodNamesRoundTripAndUnknownOnesAreNamed) {
   edited["map_aided"]["method"] = "ellipsoid";
   EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: map_aided.method: must be \"range\""),
                                      HasSubstr("got \"ellipsoid\"")));
+}
+
+TEST(FilterConfig, EncoderLowPassTimeConstantMayBeZeroButNotNegative) {
+  json edited = DefaultJson();
+  for (const double tau : {0.0, 0.02}) {
+    edited["wheels"]["encoder_low_pass_time_constant_s"] = tau;
+    EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").wheels.encoder_low_pass_time_constant_s, tau);
+  }
+  edited["wheels"]["encoder_low_pass_time_constant_s"] = -0.01;
+  EXPECT_THAT(ErrorOf(edited),
+              HasSubstr("edited.json: wheels.encoder_low_pass_time_constant_s must be finite and >= 0"));
 }
 
 TEST(FilterConfig, ConeHalfAngleMustBeBelowAQuarterTurn) {

@@ -105,6 +105,9 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
             [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, torques); }, x,
             "wheels with torque");
         ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, torques, 0.05); }, x,
+            "wheels with torque and encoder lag");
+        ExpectJacobianMatchesNumeric(
             [&](const Eigen::VectorXd& s) { return WheelLateralVelocityModel(s, vehicle, layout); }, x, "lateral");
         if (!steerable.empty()) {
           ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return SteeringModel(s, layout, steerable); },
@@ -134,6 +137,30 @@ TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
       EXPECT_EQ(m.jacobian(static_cast<Eigen::Index>(i), base), 0.0);
     }
   }
+}
+
+TEST(WheelSpeedModel, AnEncoderWithALowPassReportsTheSpeedTauEarlier) {
+  // Straight braking at 1 m/s^2 through 0.5 m/s: an encoder with a 0.02 s low-pass reads the speed
+  // of 0.02 s before, 0.52 m/s; at constant speed the lag changes nothing.
+  const mapio::VehicleConfig vehicle = mapio::VineyardUgv4wsConfig();
+  const StateLayout layout = StateLayout::For(vehicle, false);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+  x(L::kVx) = 0.5;
+  x(L::kAx) = -1.0;
+  const double radius = vehicle.wheels[0].nominal_radius_m;
+  const LinearizedMeasurement lagged = WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.02);
+  const LinearizedMeasurement instant = WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.0);
+  for (Eigen::Index i = 0; i < lagged.predicted.size(); ++i) {
+    EXPECT_NEAR(lagged.predicted(i) * radius, 0.52, 1e-12);
+    EXPECT_NEAR(instant.predicted(i) * radius, 0.50, 1e-12);
+    EXPECT_NEAR(lagged.jacobian(i, L::kAx) * radius, -0.02, 1e-12);
+    EXPECT_EQ(instant.jacobian(i, L::kAx), 0.0);
+  }
+  x(L::kAx) = 0.0;
+  EXPECT_EQ(WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.02).predicted,
+            WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.0).predicted);
+  EXPECT_THROW(WheelSpeedModel(x, vehicle, layout, std::nullopt, -0.01), std::invalid_argument);
+  EXPECT_THROW(WheelSpeedModel(x, vehicle, layout, std::nullopt, std::nan("")), std::invalid_argument);
 }
 
 TEST(WheelSpeedModel, StraightDriveGivesEqualWheelSpeeds) {

@@ -98,6 +98,10 @@ struct WheelNoise {
   double lateral_velocity_sigma_mps = 0.01;
   double gate_probability = 0.9999;
   double max_speed_radps = 200.0;  ///< larger |omega| is rejected as out of range
+  /// Time constant of the encoder's first-order low-pass speed filter, s (0: none): the encoder
+  /// reports omega(t - tau) to first order, which lags by tau d omega / dt when the vehicle brakes
+  /// or accelerates (WheelSpeedModel). The simulated encoders (config/sensors.json) use 0.02 s.
+  double encoder_low_pass_time_constant_s = 0.0;
 };
 
 struct SteeringNoise {

@@ -14,6 +14,11 @@
 //   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
 //   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eqs. (32)-(37):
 //           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque)
+//   with an encoder low-pass filter of time constant tau, v_i is replaced by its value tau earlier,
+//   to first order v_i - tau dv_i/dt, where dv_i/dt = cos(delta_i) (ax + r vy) + sin(delta_i)
+//   (ay - r vx) (the body-frame velocity derivatives of the motion model; yaw acceleration,
+//   steering rate and torque changes not modelled). A braking at 1 m/s^2 with tau = 0.02 s makes
+//   the encoder read 0.02 m/s high; without the term the filter took that as along-track motion.
 // Non-holonomic constraint of wheel i (a pseudo-measurement z = 0: wheels and tracks do not slide
 // sideways, up to a side-slip noise; it is what makes the heading observable from GNSS positions):
 //   h_i   = -sin(delta_i) (vx - r l_iy) + cos(delta_i) (vy + r l_ix)   (wheel-centre velocity across
@@ -51,10 +56,12 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
                           const StateLayout& layout, std::size_t index);
 
 /// All wheels in vehicle order (rad/s). torque_nm: one per wheel, used by the slip-aware model
-/// only (absent: T = 0, the odometer model reduces to v / R).
+/// only (absent: T = 0, the odometer model reduces to v / R). encoder_lag_s: the encoders'
+/// low-pass time constant tau (>= 0; 0: none).
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
-                                      const std::optional<std::vector<double>>& torque_nm);
+                                      const std::optional<std::vector<double>>& torque_nm,
+                                      double encoder_lag_s = 0.0);
 
 /// Lateral wheel-centre velocities of all wheels (vehicle order), m/s (the non-holonomic rows).
 LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
