@@ -8,12 +8,6 @@ namespace rowloc::geometry {
 
 namespace {
 
-Eigen::Vector2d Rotated(const Eigen::Vector2d& v, double angle_rad) {
-  const double c = std::cos(angle_rad);
-  const double s = std::sin(angle_rad);
-  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
-}
-
 Cone2 Validated(const Cone2& cone) {
   constexpr const char* kWhat = "ConeCast";
   if (!cone.apex.allFinite()) throw std::invalid_argument("ConeCast: apex must be finite");
@@ -30,10 +24,13 @@ Cone2 Validated(const Cone2& cone) {
 }  // namespace
 
 PreparedCone::PreparedCone(const Cone2& cone)
-    : cone_(Validated(cone)),
-      cos_half_aperture_(std::cos(cone_.half_aperture_rad)),
-      edge_cw_(Rotated(cone_.axis, -cone_.half_aperture_rad)),
-      edge_ccw_(Rotated(cone_.axis, cone_.half_aperture_rad)) {}
+    : cone_(Validated(cone)), cos_half_aperture_(std::cos(cone_.half_aperture_rad)) {
+  // The axis rotated by -h and +h from one cosine and sine (cos(-h) = cos(h), sin(-h) = -sin(h)).
+  const double c = cos_half_aperture_, s = std::sin(cone_.half_aperture_rad);
+  const Eigen::Vector2d& v = cone_.axis;
+  edge_cw_ = {c * v.x() + s * v.y(), -s * v.x() + c * v.y()};
+  edge_ccw_ = {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+}
 
 bool PreparedCone::SectorContains(const Eigen::Vector2d& x) const {
   const Eigen::Vector2d v = x - cone_.apex;

@@ -337,14 +337,19 @@ std::optional<SegmentIndex::Hit> SegmentIndex::ConeCast(const Cone2& cone) const
 }
 
 std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastNearest(const Cone2& cone, double window_m) const {
+  std::vector<Hit> hits;
+  ConeCastNearest(cone, window_m, hits);
+  return hits;
+}
+
+void SegmentIndex::ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits) const {
   if (!(window_m >= 0.0)) {
     throw std::invalid_argument("SegmentIndex::ConeCastNearest: window_m must be >= 0 (not NaN)");
   }
   const PreparedCone sector(cone);
-  std::vector<Hit> hits;
+  hits.clear();
   impl_->HitsNearNearest(sector, window_m, [&](const Segment2& s) { return sector.Cast(s); }, hits);
   std::sort(hits.begin(), hits.end(), HitOrder);
-  return hits;
 }
 
 std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastAll(const Cone2& cone) const { return ConeCastAll(cone, 0.0); }

@@ -257,14 +257,23 @@ RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoot
 
 std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
                                                      double max_range_m, double window_m) const {
+  Buffers buffers;
+  Candidates(pose, mount, max_range_m, window_m, buffers);
+  return std::move(buffers.candidates);
+}
+
+const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
+                                                            double max_range_m, double window_m,
+                                                            Buffers& buffers) const {
   if (!pose.allFinite()) throw std::invalid_argument("RowMapRanging::Candidates: pose not finite");
   if (!(window_m >= 0.0)) throw std::invalid_argument("RowMapRanging::Candidates: window must be >= 0");
   const SensorAtPose at = SensorAt(pose, mount);
-  const geometry::Cone2 cone{at.position, at.axis,
-                             mount.cone_half_angle_rad, max_range_m};
-  std::vector<EchoCandidate> candidates;
+  const geometry::Cone2 cone{at.position, at.axis, mount.cone_half_angle_rad, max_range_m};
+  std::vector<EchoCandidate>& candidates = buffers.candidates;
+  candidates.clear();
   // The nearest hit and every segment within the window behind it, in one search of the R-tree.
-  const std::vector<geometry::SegmentIndex::Hit> hits = index_.ConeCastNearest(cone, window_m);
+  const std::vector<geometry::SegmentIndex::Hit>& hits = buffers.hits;
+  index_.ConeCastNearest(cone, window_m, buffers.hits);
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);
   // different rows are alternatives for the data association (a prediction error of a lane).

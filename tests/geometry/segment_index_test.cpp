@@ -224,6 +224,7 @@ TEST_F(RandomMap, ConeCastNearestMatchesBruteForceWindow) {
   std::uniform_real_distribution<double> aperture(0.0, Deg(60.0));
   std::uniform_real_distribution<double> window(0.0, 3.0);
   std::size_t beyond_window = 0, several = 0;
+  std::vector<Hit> reused;  // one buffer for every query
   for (int q = 0; q < 4 * kQueryScale; ++q) {
     const Cone2 cone{{coord_(rng_), coord_(rng_)}, Heading(angle_(rng_)), aperture(rng_), q % 2 == 0 ? 6.0 : kInf};
     const double window_m = q % 7 == 0 ? 0.0 : window(rng_);
@@ -243,6 +244,12 @@ TEST_F(RandomMap, ConeCastNearestMatchesBruteForceWindow) {
     }
     std::vector<std::size_t> got;
     const std::vector<Hit> hits = index_->ConeCastNearest(cone, window_m);
+    index_->ConeCastNearest(cone, window_m, reused);  // the buffer version: cleared, then the same
+    ASSERT_EQ(reused.size(), hits.size());
+    for (std::size_t i = 0; i < hits.size(); ++i) {
+      EXPECT_EQ(reused[i].entry, hits[i].entry);
+      EXPECT_EQ(reused[i].hit.range_m, hits[i].hit.range_m);
+    }
     for (std::size_t i = 0; i < hits.size(); ++i) {
       got.push_back(hits[i].entry);
       if (i > 0) {

@@ -237,6 +237,28 @@ TEST(MapAidedRanging, WindowSelectsRowsNearestFirst) {
   }
 }
 
+TEST(MapAidedRanging, ReusedBuffersGiveTheSameCandidatesAsFreshOnes) {
+  // One Buffers object through queries with 2, 1 and 0 candidates (and back): each result is the
+  // value version's, nothing left over from the call before.
+  const RowMapRanging ranging = MakeRanging({MakeRow("far", {{-10, -0.3}, {10, -0.3}}),
+                                             MakeRow("near", {{-10, 0}, {10, 0}})});
+  RowMapRanging::Buffers buffers;
+  const Eigen::Vector3d away(0.0, 5.0, kPi);  // beyond the 4 m range of both rows
+  for (const auto& [pose, window] : std::vector<std::pair<Eigen::Vector3d, double>>{
+           {kAbove, 0.5}, {kAbove, 0.0}, {away, 0.5}, {kAbove, 0.5}}) {
+    const std::vector<EchoCandidate> fresh = ranging.Candidates(pose, kDown, kMaxRange, window);
+    const std::vector<EchoCandidate>& reused = ranging.Candidates(pose, kDown, kMaxRange, window, buffers);
+    EXPECT_EQ(&reused, &buffers.candidates);
+    ASSERT_EQ(reused.size(), fresh.size()) << pose.transpose() << " window " << window;
+    for (std::size_t i = 0; i < fresh.size(); ++i) {
+      EXPECT_EQ(reused[i].entry, fresh[i].entry);
+      EXPECT_EQ(reused[i].predicted_range_m, fresh[i].predicted_range_m);
+      EXPECT_EQ(reused[i].jacobian, fresh[i].jacobian);
+    }
+  }
+  EXPECT_EQ(ranging.Candidates(away, kDown, kMaxRange, 0.5, buffers).size(), 0u);
+}
+
 TEST(MapAidedRanging, BeamTiltedBeyondTheHalfAngleHitsWithTheConeEdge) {
   // Row y = 0, sensor at (0.75, 1): h = 1, dh/dphi = l_x = 0.75.
   const RowMapRanging ranging = HorizontalRow();

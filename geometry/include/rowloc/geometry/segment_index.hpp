@@ -82,6 +82,8 @@ class SegmentIndex {
   /// within the window; +inf: every hit, as ConeCastAll). Empty when the sector meets no segment.
   /// Throws std::invalid_argument for a negative or NaN window_m; errors otherwise as ConeCast.
   std::vector<Hit> ConeCastNearest(const Cone2& cone, double window_m) const;
+  /// The same into `hits` (cleared first): a caller that keeps the vector allocates nothing per query.
+  void ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits) const;
 
   /// Every segment meeting the sector, by range (then entry); errors as ConeCast.
   std::vector<Hit> ConeCastAll(const Cone2& cone) const;

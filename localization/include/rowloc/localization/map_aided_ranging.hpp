@@ -99,6 +99,15 @@ class RowMapRanging {
   std::vector<EchoCandidate> Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
                                         double max_range_m, double window_m) const;
 
+  /// Storage that Candidates reuses from call to call (a filter keeps one: no allocation per echo).
+  struct Buffers {
+    std::vector<geometry::SegmentIndex::Hit> hits;
+    std::vector<EchoCandidate> candidates;
+  };
+  /// The same into buffers.candidates (cleared first), which it returns.
+  const std::vector<EchoCandidate>& Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
+                                               double max_range_m, double window_m, Buffers& buffers) const;
+
  private:
   RowMapRanging(const geometry::RowMap& local_map, double row_smoothing_m);
   static std::vector<EntryShape> Shapes(const geometry::RowMap& local_map, double row_smoothing_m);

@@ -159,6 +159,7 @@ class VehicleEkf {
   std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
   std::vector<std::optional<double>> last_steering_rad_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
+  RowMapRanging::Buffers candidate_buffers_;      ///< reused by every echo (no state: scratch)
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
