@@ -24,8 +24,10 @@
 
 namespace rowloc::localization {
 
-using VectorRef = Eigen::Ref<const Eigen::VectorXd>;
-using MatrixRef = Eigen::Ref<const Eigen::MatrixXd>;
+/// Arguments of KalmanUpdate: dynamic, fixed or bounded-size vectors and matrices bind without a
+/// copy; Aligned16 (Eigen allocates them so) keeps Eigen's aligned vector loads in the inner loops.
+using VectorRef = Eigen::Ref<const Eigen::VectorXd, Eigen::Aligned16>;
+using MatrixRef = Eigen::Ref<const Eigen::MatrixXd, Eigen::Aligned16, Eigen::OuterStride<>>;
 
 struct UpdateOutcome {
   Eigen::VectorXd innovation;             ///< y = z - h(x) (angles wrapped by the caller)
