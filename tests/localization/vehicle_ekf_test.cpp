@@ -1,6 +1,6 @@
 // VehicleEkf (issue 4; vehicle_ekf.hpp): construction errors, GNSS heading initialisation, input
 // checks (FilterInputError, filter bit-identical afterwards), gaps, GNSS outlier gating and
-// re-acquisition, steering through +-pi. Accuracy and the 10^6-step property test are in
+// re-acquisition, steering through +-pi, the encoder low-pass of the config in the wheel update. Accuracy and the 10^6-step property test are in
 // vehicle_ekf_property_test.cpp.
 #include "vehicle_ekf_test_support.hpp"
 
@@ -304,6 +304,50 @@ TEST(VehicleEkfImu, AccelerometerBiasOfASlopeIsEstimated) {
   EXPECT_NEAR(ekf.state()(ekf.layout().accel_bias), 0.4, 0.05);
   EXPECT_NEAR(ekf.state()(ekf.layout().accel_bias + 1), -0.2, 0.05);
   EXPECT_NEAR(ekf.state()(StateLayout::kVx), 1.0, 0.02);
+}
+
+TEST(VehicleEkfWheels, TheEncoderLowPassOfTheConfigShiftsTheWheelInnovationByTauDvDt) {
+  // Two filters, encoder_low_pass_time_constant_s 0 and 0.02, fed the same GNSS and IMU messages
+  // stay identical; at the first wheels message after 5 s their wheel innovations differ by
+  // tau (a_x + r v_y) / R per wheel (differential drive: wheels straight, no slip model).
+  const VehicleConfig v = mapio::DifferentialDriveConfig();
+  const Drive d = MakeDrive(v, {}, StraightThenCircle());
+  FilterConfig lagged_config;
+  lagged_config.slip_aware_odometry.enabled = false;
+  lagged_config.wheels.encoder_low_pass_time_constant_s = 0.02;
+  VehicleEkf plain = MakeEkf(v);
+  VehicleEkf lagged(v, lagged_config, kOrigin, WheelNames(v));
+  for (const SensorMessage& m : d.messages) {
+    const auto* wheels = std::get_if<WheelsMessage>(&m);
+    if (wheels == nullptr) {
+      plain.Process(m);
+      lagged.Process(m);
+      continue;
+    }
+    if (wheels->time_s < 5.0) continue;
+    VehicleEkf predicted = plain;  // the state both predict to at the message's time
+    predicted.Process(GpsMessage{wheels->time_s, "gnss", GnssFixQuality::kNone, std::nullopt});
+    ASSERT_EQ(predicted.state(), [&] {
+      VehicleEkf other = lagged;
+      other.Process(GpsMessage{wheels->time_s, "gnss", GnssFixQuality::kNone, std::nullopt});
+      return other.state();
+    }());
+    const Eigen::VectorXd& x = predicted.state();
+    const double dv_dt = x(StateLayout::kAx) + x(StateLayout::kYawRate) * x(StateLayout::kVy);
+    ASSERT_GT(std::abs(dv_dt), 1e-6);  // a non-zero acceleration state, so the term shows
+    const ProcessResult a = plain.Process(m);
+    const ProcessResult b = lagged.Process(m);
+    ASSERT_EQ(a.updates.at(0).sensor, "wheels");
+    ASSERT_EQ(b.updates.at(0).sensor, "wheels");
+    for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+      const auto row = static_cast<Eigen::Index>(i);
+      EXPECT_NEAR(b.updates[0].outcome.innovation(row) - a.updates[0].outcome.innovation(row),
+                  0.02 * dv_dt / v.wheels[i].nominal_radius_m, 1e-12)
+          << "wheel " << i;
+    }
+    return;
+  }
+  FAIL() << "no wheels message after 5 s";
 }
 
 TEST(VehicleEkfInput, SteeringAngleThroughPiIsTracked) {
