@@ -217,30 +217,13 @@ struct SegmentIndex::Impl {
               [](const PieceCandidate& l, const PieceCandidate& r) { return l.distance_m < r.distance_m; });
   }
 
-  // One step of the growing search: the segments near the piece of the sector with range in
-  // [inner_m, outer_m], cast nearest first while they can still beat best (or reach limit_m).
-  template <class Cast>
-  void CastPiece(const PreparedCone& sector, const SectorHalfPlanes& half_planes, double inner_m,
-                 double outer_m, double limit_m, Cast& cast, std::optional<Hit>& best) const {
-    const Eigen::Vector2d& apex = sector.cone().apex;
-    boost::container::small_vector<PieceCandidate, 16> candidates;
-    SortedPieceCandidates(sector, half_planes, inner_m, outer_m, candidates);
-    for (const PieceCandidate& c : candidates) {
-      if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m : limit_m, apex)) return;
-      if (const std::optional<RayHit> hit = cast(c.segment)) {
-        const Hit candidate{*hit, c.entry};
-        if (Better(candidate, best)) best = candidate;
-      }
-    }
-  }
-
-  // Every hit of cast(segment) with range <= (nearest range) + window_m, into hits (unsorted, no
-  // entry twice), by the growing-radius search of NearestHit: a piece's candidates are cast nearest
-  // first until one is too far to come within the window of the best hit so far, and the search
-  // stops once the window ends inside the pieces searched.
-  template <class Cast>
-  void HitsNearNearest(const PreparedCone& sector, double window_m, Cast&& cast, std::vector<Hit>& hits) const {
-    if (entries.empty()) return;
+  // The growing-radius search (header comment): pieces [r_(k-1), r_k] of the sector, r_k = 2^k r0,
+  // each piece's candidates cast nearest first until one is too far to come within window_m of the
+  // best hit so far; it stops once best + window_m <= r_k, or at the reach. visit(hit) sees every
+  // hit cast (a segment that straddles two pieces twice). Returns the best (nearest) hit.
+  template <class Cast, class Visit>
+  std::optional<Hit> GrowingSearch(const PreparedCone& sector, double window_m, Cast&& cast, Visit&& visit) const {
+    if (entries.empty()) return std::nullopt;
     const double limit_m = std::min(sector.cone().max_range_m, CoverRadius(sector.cone().apex));
     const Eigen::Vector2d& apex = sector.cone().apex;
     const SectorHalfPlanes half_planes(sector);
@@ -252,34 +235,36 @@ struct SegmentIndex::Impl {
       SortedPieceCandidates(sector, half_planes, inner_m, outer_m, candidates);
       for (const PieceCandidate& c : candidates) {
         if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m + window_m : limit_m, apex)) break;
-        const std::optional<RayHit> hit = cast(c.segment);
-        if (!hit || std::any_of(hits.begin(), hits.end(), [&](const Hit& h) { return h.entry == c.entry; })) continue;
-        hits.push_back(Hit{*hit, c.entry});
-        if (Better(hits.back(), best)) best = hits.back();
+        if (const std::optional<RayHit> hit = cast(c.segment)) {
+          const Hit candidate{*hit, c.entry};
+          visit(candidate);
+          if (Better(candidate, best)) best = candidate;
+        }
       }
-      if ((best && best->hit.range_m + window_m <= outer_m) || outer_m >= limit_m) break;
+      if ((best && best->hit.range_m + window_m <= outer_m) || outer_m >= limit_m) return best;
       inner_m = outer_m;
     }
+  }
+
+  // Nearest hit of cast(segment) over all entries.
+  template <class Cast>
+  std::optional<Hit> NearestHit(const PreparedCone& sector, Cast&& cast) const {
+    return GrowingSearch(sector, 0.0, cast, [](const Hit&) {});
+  }
+
+  // Every hit of cast(segment) with range <= (nearest range) + window_m, into hits (unsorted, no
+  // entry twice).
+  template <class Cast>
+  void HitsNearNearest(const PreparedCone& sector, double window_m, Cast&& cast, std::vector<Hit>& hits) const {
+    const std::optional<Hit> best = GrowingSearch(sector, window_m, cast, [&](const Hit& hit) {
+      if (std::none_of(hits.begin(), hits.end(), [&](const Hit& h) { return h.entry == hit.entry; })) {
+        hits.push_back(hit);
+      }
+    });
     if (!best) return;
     const double last_m = best->hit.range_m + window_m;
     hits.erase(std::remove_if(hits.begin(), hits.end(), [&](const Hit& h) { return h.hit.range_m > last_m; }),
                hits.end());
-  }
-
-  // Nearest hit of cast(segment) over all entries, by the growing-radius search.
-  template <class Cast>
-  std::optional<Hit> NearestHit(const PreparedCone& sector, Cast&& cast) const {
-    if (entries.empty()) return std::nullopt;
-    const double limit_m = std::min(sector.cone().max_range_m, CoverRadius(sector.cone().apex));
-    const SectorHalfPlanes half_planes(sector);
-    std::optional<Hit> best;
-    double inner_m = 0.0;
-    for (double radius_m = initial_radius_m;; radius_m *= 2.0) {
-      const double outer_m = std::min(radius_m, limit_m);
-      CastPiece(sector, half_planes, inner_m, outer_m, limit_m, cast, best);
-      if ((best && best->hit.range_m <= outer_m) || outer_m >= limit_m) return best;
-      inner_m = outer_m;
-    }
   }
 };
 
