@@ -85,32 +85,28 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
 
 /// The rows of F other than the identity's (the states whose step depends on others) and the
 /// columns of their non-zero entries, diagonal included: PropagateState's pattern (an entry of the
-/// pattern may still be zero, e.g. f(vx, vy) = r dt at r = 0).
+/// pattern may still be zero, e.g. f(vx, vy) = r dt at r = 0). Row k is state k: the coupled
+/// states are the first five of the layout (static_assert), so their rows and columns of P are
+/// its leading blocks.
 struct CoupledRow {
-  int state;
   int count;
   std::array<int, 5> columns;
 };
 constexpr std::array<CoupledRow, 5> kCoupledRows{{
-    {L::kX, 5, {L::kX, L::kPhi, L::kVx, L::kVy, L::kYawRate}},
-    {L::kY, 5, {L::kY, L::kPhi, L::kVx, L::kVy, L::kYawRate}},
-    {L::kPhi, 2, {L::kPhi, L::kYawRate, 0, 0, 0}},
-    {L::kVx, 4, {L::kVx, L::kVy, L::kYawRate, L::kAx, 0}},
-    {L::kVy, 4, {L::kVy, L::kVx, L::kYawRate, L::kAy, 0}},
+    {5, {L::kX, L::kPhi, L::kVx, L::kVy, L::kYawRate}},   // X
+    {5, {L::kY, L::kPhi, L::kVx, L::kVy, L::kYawRate}},   // Y
+    {2, {L::kPhi, L::kYawRate, 0, 0, 0}},                  // phi
+    {4, {L::kVx, L::kVy, L::kYawRate, L::kAx, 0}},         // vx
+    {4, {L::kVy, L::kVx, L::kYawRate, L::kAy, 0}},         // vy
 }};
 constexpr int kCoupled = static_cast<int>(kCoupledRows.size());
-constexpr bool CoupledStatesLeadTheState() {
-  for (int k = 0; k < kCoupled; ++k) {
-    if (kCoupledRows[static_cast<std::size_t>(k)].state != k) return false;
-  }
-  return true;
-}
-static_assert(CoupledStatesLeadTheState(), "CongruenceWith writes the coupled rows and columns as leading blocks");
+static_assert(L::kX == 0 && L::kY == 1 && L::kPhi == 2 && L::kVx == 3 && L::kVy == 4,
+              "CongruenceWith writes the coupled rows and columns of P as leading blocks");
 
 /// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns
-/// c_k = sum_j f(i_k, j) P.col(j) of P F^T for the coupled states i_k: since P is symmetric, row and
-/// column i_k of F P F^T are c_k outside the coupled block, and the block is
-/// B(a, b) = sum_j f(i_a, j) c_b(j), computed for a <= b and written to both triangles (P stays
+/// c_k = sum_j f(k, j) P.col(j) of P F^T for the coupled states k: since P is symmetric, row and
+/// column k of F P F^T are c_k outside the coupled block, and the block is
+/// B(a, b) = sum_j f(a, j) c_b(j), computed for a <= b and written to both triangles (P stays
 /// exactly symmetric). O(nnz(f) n) on contiguous columns instead of O(9^2 n). Columns: an
 /// n x kCoupled matrix type.
 template <typename Columns>
@@ -120,11 +116,11 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   for (int k = 0; k < kCoupled; ++k) {
     const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(k)];
     double* target = c.col(k).data();
-    const double first = f(row.state, row.columns[0]);
+    const double first = f(k, row.columns[0]);
     const double* source = p.col(row.columns[0]).data();
     for (Eigen::Index r = 0; r < n; ++r) target[r] = first * source[r];
     for (int e = 1; e < row.count; ++e) {
-      const double scale = f(row.state, row.columns[static_cast<std::size_t>(e)]);
+      const double scale = f(k, row.columns[static_cast<std::size_t>(e)]);
       source = p.col(row.columns[static_cast<std::size_t>(e)]).data();
       for (Eigen::Index r = 0; r < n; ++r) target[r] += scale * source[r];
     }
@@ -136,20 +132,17 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
       double sum = 0.0;
       for (int e = 0; e < row.count; ++e) {
         const int j = row.columns[static_cast<std::size_t>(e)];
-        sum += f(row.state, j) * c(j, b);
+        sum += f(a, j) * c(j, b);
       }
       block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] = sum;
     }
   }
-  // The coupled states are the first kCoupled (static_assert above): their columns are c, and
-  // their rows, by symmetry, c^T, written column by column (kCoupled contiguous entries each).
+  // The coupled states' columns are c and their rows, by symmetry, c^T, written column by column
+  // (kCoupled contiguous entries each).
   p.leftCols<kCoupled>() = c;
   p.topRows<kCoupled>() = c.transpose();
   for (int a = 0; a < kCoupled; ++a) {
-    for (int b = a; b < kCoupled; ++b) {
-      const int i = kCoupledRows[static_cast<std::size_t>(a)].state, k = kCoupledRows[static_cast<std::size_t>(b)].state;
-      p(i, k) = p(k, i) = block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)];
-    }
+    for (int b = a; b < kCoupled; ++b) p(a, b) = p(b, a) = block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)];
   }
 }
 
