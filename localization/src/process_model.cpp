@@ -142,7 +142,8 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   p.leftCols<kCoupled>() = c;
   p.topRows<kCoupled>() = c.transpose();
   for (int a = 0; a < kCoupled; ++a) {
-    for (int b = a; b < kCoupled; ++b) p(a, b) = p(b, a) = block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)];
+    const auto& block_row = block[static_cast<std::size_t>(a)];
+    for (int b = a; b < kCoupled; ++b) p(a, b) = p(b, a) = block_row[static_cast<std::size_t>(b)];
   }
 }
 
