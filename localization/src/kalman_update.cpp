@@ -76,6 +76,39 @@ void SubtractUpperRankUpdate(Eigen::MatrixXd& p, const Wide& u, const Wide& v) {
   MirrorUpperTriangle(p);
 }
 
+/// The joint statistics of an m-dimensional update: U = P H^T (n x m), S = H P H^T + R (made
+/// exactly symmetric) and its Cholesky factor.
+template <typename Tall, typename Square>
+struct JointStatistics {
+  Tall pht;
+  Square s;
+  Eigen::LLT<Square> s_factor;
+};
+
+/// Computes `joint` and writes the innovation, S and the NIS y^T S^-1 y to outcome. False when the
+/// update must not be applied: S not positive definite (R must be; NIS = +inf) or the NIS above the
+/// gate. Small matrices (n <= ~25, m <= 8) and a sparse H: P H^T is m column operations on
+/// contiguous columns of the column-major P, O(nnz(H) n), without Eigen's GEMM packing
+/// (docs/benchmarks.md, "Vehicle EKF").
+template <typename Tall, typename Square>
+bool GateJointly(const Eigen::MatrixXd& covariance, const VectorRef& innovation, const MatrixRef& jacobian,
+                 const MatrixRef& noise, double gate_threshold, JointStatistics<Tall, Square>& joint,
+                 UpdateOutcome& outcome) {
+  outcome.innovation = innovation;
+  joint.pht = TimesTransposed<Tall>(covariance, jacobian);
+  joint.s = noise;
+  joint.s.noalias() += jacobian.lazyProduct(joint.pht);  // m x m, tiny
+  joint.s = (0.5 * (joint.s + joint.s.transpose())).eval();
+  outcome.innovation_covariance = joint.s;
+  joint.s_factor.compute(joint.s);
+  if (joint.s_factor.info() != Eigen::Success) {
+    outcome.nis = std::numeric_limits<double>::infinity();
+    return false;  // S not positive definite: never apply such an update
+  }
+  outcome.nis = innovation.dot(joint.s_factor.solve(innovation));
+  return outcome.nis <= gate_threshold;
+}
+
 /// The update with temporaries of type Tall (n x m), Wide (n x 2m) and Square (m x m): bounded
 /// fixed-capacity (stack) matrices for the usual sizes, dynamic ones beyond them.
 template <typename Tall, typename Wide, typename Square>
@@ -85,24 +118,12 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   const Eigen::Index n = state.size();
   const Eigen::Index m = innovation.size();
   UpdateOutcome outcome;
-  outcome.innovation = innovation;
-  // Small matrices (n <= ~25, m <= 4) and a sparse H: every product below is written as m column
-  // operations (axpy / rank-1 updates on contiguous columns of the column-major P) so that it costs
-  // O(nnz(H) n + m n^2) without Eigen's GEMM packing (docs/benchmarks.md, "Vehicle EKF").
-  const Tall pht = TimesTransposed<Tall>(covariance, jacobian);  // P H^T (n x m)
-  Square s = noise;
-  s.noalias() += jacobian.lazyProduct(pht);                             // m x m, tiny
-  s = (0.5 * (s + s.transpose())).eval();
-  outcome.innovation_covariance = s;
-  const Eigen::LLT<Square> s_factor(s);
-  if (s_factor.info() != Eigen::Success) {
-    outcome.nis = std::numeric_limits<double>::infinity();
-    return outcome;  // S not positive definite (R must be): never apply such an update
-  }
-  outcome.nis = innovation.dot(s_factor.solve(innovation));
-  if (!(outcome.nis <= gate_threshold)) return outcome;
-  // K = P H^T S^-1, solved as (S^-1 (P H^T)^T)^T (S symmetric).
-  const Tall gain = s_factor.solve(pht.transpose()).transpose();  // n x m
+  JointStatistics<Tall, Square> joint;
+  if (!GateJointly(covariance, innovation, jacobian, noise, gate_threshold, joint, outcome)) return outcome;
+  const Tall& pht = joint.pht;
+  // K = P H^T S^-1, solved as (S^-1 (P H^T)^T)^T (S symmetric). The products below are rank-m
+  // column operations (O(m n^2), upper triangle only).
+  const Tall gain = joint.s_factor.solve(pht.transpose()).transpose();  // n x m
   state.noalias() += gain.lazyProduct(innovation);
   if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
   // Joseph form in one pass: with U = P H^T and A = P - K U^T, A H^T = U - K (S - R), so
@@ -113,7 +134,7 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   const Eigen::Index m2 = 2 * m;
   Wide left(n, m2), right(n, m2);
   left.leftCols(m) = gain;
-  left.rightCols(m) = pht - gain.lazyProduct(s);
+  left.rightCols(m) = pht - gain.lazyProduct(joint.s);
   right.leftCols(m) = pht;
   right.rightCols(m) = gain;
   SubtractUpperRankUpdate(covariance, left, right);
@@ -185,19 +206,9 @@ UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& cova
                                    const VectorRef& innovation, const MatrixRef& jacobian,
                                    const MatrixRef& noise, double gate_threshold, int angle_index) {
   UpdateOutcome outcome;
-  outcome.innovation = innovation;
-  const Tall pht = TimesTransposed<Tall>(covariance, jacobian);  // P H^T (n x m)
-  Square s = noise;
-  s.noalias() += jacobian.lazyProduct(pht);
-  s = (0.5 * (s + s.transpose())).eval();
-  outcome.innovation_covariance = s;
-  const Eigen::LLT<Square> s_factor(s);
-  if (s_factor.info() != Eigen::Success) {
-    outcome.nis = std::numeric_limits<double>::infinity();
-    return outcome;
-  }
-  outcome.nis = innovation.dot(s_factor.solve(innovation));
-  if (!(outcome.nis <= gate_threshold)) return outcome;
+  JointStatistics<Tall, Square> joint;
+  if (!GateJointly(covariance, innovation, jacobian, noise, gate_threshold, joint, outcome)) return outcome;
+  const Tall& pht = joint.pht;
   const Vector start = state;  // the linearization point (not wrapped between the corrections)
   for (Eigen::Index i = 0; i < innovation.size(); ++i) {
     const Vector u = i == 0 ? Vector(pht.col(0)) : SparseColumn<Vector>(covariance, jacobian, i);
