@@ -10,7 +10,11 @@ endif()
 add_library(rowloc_options INTERFACE)
 target_compile_options(rowloc_options INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Woverloaded-virtual
-  -Wcast-align -Wdouble-promotion -Wimplicit-fallthrough)
+  -Wcast-align -Wdouble-promotion -Wimplicit-fallthrough
+  # No fused multiply-add contraction (GCC contracts by default in C++, and always where FMA is baseline,
+  # e.g. aarch64): every product rounds on its own, so the covariance kernels that rely on commuted
+  # products being equal stay exactly symmetric, and results do not depend on the CPU's FMA.
+  -ffp-contract=off)
 if(ROWLOC_WERROR)
   target_compile_options(rowloc_options INTERFACE -Werror)
 endif()

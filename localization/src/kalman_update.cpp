@@ -1,5 +1,7 @@
 #include "rowloc/localization/kalman_update.hpp"
 
+#include "column_kernels.hpp"
+
 #include <Eigen/Cholesky>
 
 #include <boost/math/distributions/chi_squared.hpp>
@@ -30,17 +32,23 @@ double ChiSquareGate(int dof, double probability) {
 namespace {
 
 /// target += M h_row^T for a square M (n x n) and row `row` of a sparse H: the columns of M at the
-/// non-zero entries of that row. Plain loops on contiguous columns (column-major storage): for these
-/// sizes Eigen's expression set-up per column costs more than the arithmetic, and the compiler
-/// vectorizes the inner loop.
+/// non-zero entries of that row, up to kMaxCombinedColumns of them in one pass over target.
+ROWLOC_VECTOR_CLONES
 void AddSparseColumn(const Eigen::MatrixXd& m, const MatrixRef& h, Eigen::Index row, double* target) {
-  const Eigen::Index n = m.rows();
+  const double* sources[detail::kMaxCombinedColumns];
+  double scales[detail::kMaxCombinedColumns];
+  int count = 0;
   for (Eigen::Index j = 0; j < h.cols(); ++j) {
     const double factor = h(row, j);
     if (factor == 0.0) continue;
-    const double* source = m.col(j).data();
-    for (Eigen::Index r = 0; r < n; ++r) target[r] += factor * source[r];
+    sources[count] = m.col(j).data();
+    scales[count] = factor;
+    if (++count == detail::kMaxCombinedColumns) {
+      detail::CombineColumns<true>(sources, scales, count, m.rows(), target);
+      count = 0;
+    }
   }
+  if (count > 0) detail::CombineColumns<true>(sources, scales, count, m.rows(), target);
 }
 
 /// M H^T (n x m): column i is M h_i^T.
@@ -150,25 +158,31 @@ Vector SparseColumn(const Eigen::MatrixXd& covariance, const MatrixRef& jacobian
   return u;
 }
 
+/// P <- P - g g^T - (k w^T + w k^T) on every entry of the n x n column-major p. Entry (r, c) is
+/// g_r g_c + (k_r w_c + w_r k_c), the same products and addends as entry (c, r) in commuted order,
+/// and IEEE products and sums commute: a symmetric P stays exactly symmetric without a mirroring
+/// pass (its strided stores cost as much as the update). That needs every product rounded on its
+/// own: no FMA contraction (cmake/RowlocOptions.cmake). Contiguous columns: the loop vectorizes.
+ROWLOC_VECTOR_CLONES
+void SubtractSymmetricRankThree(double* p, const double* g, const double* k, const double* w, Eigen::Index n) {
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const double gc = g[c], kc = k[c], wc = w[c];
+    double* column = p + c * n;
+    for (Eigen::Index r = 0; r < n; ++r) column[r] -= g[r] * gc + (k[r] * wc + w[r] * kc);
+  }
+}
+
 /// One scalar correction with u = P h^T and s = h u + r > 0: k = u / s, x <- x + k y and the Joseph
 /// form P - k u^T - w k^T with w = u - k s (zero up to round-off), which is the symmetric
-/// P - s k k^T - (k w^T + w k^T): each pair of entries computed once and written to both triangles,
-/// so P stays exactly symmetric.
+/// P - s k k^T - (k w^T + w k^T) = P - g g^T - (k w^T + w k^T) with g = sqrt(s) k. P must be
+/// symmetric (KalmanUpdate's precondition); it stays exactly symmetric.
 template <typename Vector>
 void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Vector& u, double s, double y) {
-  const Eigen::Index n = state.size();
   const Vector gain = u / s;
   state.noalias() += y * gain;
   const Vector w = u - s * gain;
-  const double* __restrict__ k = gain.data();
-  const double* __restrict__ wv = w.data();
-  double* const data = covariance.data();
-  for (Eigen::Index c = 0; c < n; ++c) {
-    const double sk = s * k[c], kc = k[c], wc = wv[c];
-    double* __restrict__ column = data + c * n;
-    for (Eigen::Index r = 0; r <= c; ++r) column[r] -= sk * k[r] + (k[r] * wc + wv[r] * kc);  // upper part
-    for (Eigen::Index r = 0; r < c; ++r) data[r * n + c] = column[r];  // mirrored into row c
-  }
+  const Vector root = std::sqrt(s) * gain;
+  SubtractSymmetricRankThree(covariance.data(), root.data(), gain.data(), w.data(), state.size());
 }
 
 /// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is

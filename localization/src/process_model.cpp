@@ -2,6 +2,8 @@
 
 #include "rowloc/localization/kalman_update.hpp"
 
+#include "column_kernels.hpp"
+
 #include <array>
 #include <cmath>
 
@@ -89,7 +91,7 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
 /// states are the first five of the layout (static_assert), so their rows and columns of P are
 /// its leading blocks.
 struct CoupledRow {
-  int count;
+  int count;  ///< 1 to 5
   std::array<int, 5> columns;
 };
 constexpr std::array<CoupledRow, 5> kCoupledRows{{
@@ -103,28 +105,33 @@ constexpr int kCoupled = static_cast<int>(kCoupledRows.size());
 static_assert(L::kX == 0 && L::kY == 1 && L::kPhi == 2 && L::kVx == 3 && L::kVy == 4,
               "CongruenceWith writes the coupled rows and columns of P as leading blocks");
 
-/// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns
-/// c_k = sum_j f(k, j) P.col(j) of P F^T for the coupled states k: since P is symmetric, row and
-/// column k of F P F^T are c_k outside the coupled block, and the block is
-/// B(a, b) = sum_j f(a, j) c_b(j), computed for a <= b and written to both triangles (P stays
-/// exactly symmetric). O(nnz(f) n) on contiguous columns instead of O(9^2 n). Columns: an
-/// n x kCoupled matrix type.
+/// The columns c_k = sum_j f(k, j) P.col(j) of P F^T for the coupled states k, into c (n x
+/// kCoupled, column-major) from the n x n column-major p, each in one pass (column_kernels.hpp).
+ROWLOC_VECTOR_CLONES
+void CoupledColumns(const BaseJacobian& f, const double* __restrict__ p, Eigen::Index n, double* __restrict__ c) {
+  for (int k = 0; k < kCoupled; ++k) {
+    const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(k)];
+    std::array<const double*, detail::kMaxCombinedColumns> sources{};
+    std::array<double, detail::kMaxCombinedColumns> scales{};
+    for (int e = 0; e < row.count; ++e) {
+      const int j = row.columns[static_cast<std::size_t>(e)];
+      sources[static_cast<std::size_t>(e)] = p + j * n;
+      scales[static_cast<std::size_t>(e)] = f(k, j);
+    }
+    detail::CombineColumns<false>(sources.data(), scales.data(), row.count, n, c + k * n);
+  }
+}
+
+/// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns c_k of
+/// P F^T (CoupledColumns): since P is symmetric, row and column k of F P F^T are c_k outside the
+/// coupled block, and the block is B(a, b) = sum_j f(a, j) c_b(j), computed for a <= b and written
+/// to both triangles (P stays exactly symmetric). O(nnz(f) n) on contiguous columns instead of
+/// O(9^2 n). Columns: an n x kCoupled matrix type.
 template <typename Columns>
 void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
   Columns c(n, kCoupled);
-  for (int k = 0; k < kCoupled; ++k) {
-    const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(k)];
-    double* target = c.col(k).data();
-    const double first = f(k, row.columns[0]);
-    const double* source = p.col(row.columns[0]).data();
-    for (Eigen::Index r = 0; r < n; ++r) target[r] = first * source[r];
-    for (int e = 1; e < row.count; ++e) {
-      const double scale = f(k, row.columns[static_cast<std::size_t>(e)]);
-      source = p.col(row.columns[static_cast<std::size_t>(e)]).data();
-      for (Eigen::Index r = 0; r < n; ++r) target[r] += scale * source[r];
-    }
-  }
+  CoupledColumns(f, p.data(), n, c.data());
   std::array<std::array<double, kCoupled>, kCoupled> block;  // upper triangle (a <= b) only
   for (int a = 0; a < kCoupled; ++a) {
     const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];

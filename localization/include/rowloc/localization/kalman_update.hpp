@@ -15,9 +15,11 @@
 // factorization; m > 1 components with a diagonal R are gated on the joint NIS above and then
 // applied as m scalar corrections at the same linearization point (sequential Kalman filtering,
 // Simon, Optimal State Estimation, 2006, §6.1), each
-//   k = u / s, u = P h^T, s = h u + r,   P <- P - s k k^T - (k w^T + w k^T),  w = u - k s,
-// the same Joseph identity for m = 1. The heading (state index angle_index) is wrapped to
-// (-pi, pi] after the correction.
+//   k = u / s, u = P h^T, s = h u + r,   P <- P - g g^T - (k w^T + w k^T),  w = u - k s,
+// with g = sqrt(s) k (s k k^T = g g^T), the same Joseph identity for m = 1. Every entry of that
+// correction is computed alike for (r, c) and (c, r), so these paths need a symmetric P and keep
+// it exactly symmetric without a mirroring pass (the filter's P always is: PredictStep and SetPose
+// keep it so). The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
 #pragma once
 
 #include <Eigen/Core>
@@ -38,8 +40,10 @@ struct UpdateOutcome {
   bool accepted = false;                  ///< false: gated out (or S not positive definite)
 };
 
-/// Applies the update to (state, covariance) unless gated. gate_threshold is the NIS above which
-/// the measurement is rejected (+infinity: never). angle_index < 0: no angle state to wrap.
+/// Applies the update to (state, covariance) unless gated. covariance must be symmetric (an exactly
+/// symmetric one stays exactly symmetric; the scalar and diagonal-noise paths do not symmetrize an
+/// asymmetric one). gate_threshold is the NIS above which the measurement is rejected (+infinity:
+/// never). angle_index < 0: no angle state to wrap.
 /// Throws std::invalid_argument on mismatched sizes, angle_index >= state size or non-finite inputs
 /// (innovation, H, R).
 UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const VectorRef& innovation,

@@ -33,6 +33,7 @@
 #include "rowloc/mapio/vehicle_config.hpp"
 
 #include <Eigen/Core>
+#include <boost/container/small_vector.hpp>
 
 #include <optional>
 #include <stdexcept>
@@ -77,7 +78,9 @@ struct EchoTrace {
   std::optional<EdgeLine> line;               ///< its local straight row (normal towards the sensor)
 };
 struct ProcessResult {
-  std::vector<UpdateRecord> updates;  ///< the updates made (none before initialisation)
+  /// The updates made (none before initialisation; at most two per message, kept inline: a
+  /// message costs no heap allocation for them).
+  boost::container::small_vector<UpdateRecord, 2> updates;
   std::optional<std::string> notice;  ///< initialisation, re-initialisation after a gap
   std::optional<EchoTrace> echo;      ///< ultrasonic messages with a row map attached
 };
