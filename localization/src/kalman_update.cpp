@@ -164,10 +164,11 @@ Vector SparseColumn(const Eigen::MatrixXd& covariance, const MatrixRef& jacobian
 /// pass (its strided stores cost as much as the update). That needs every product rounded on its
 /// own: no FMA contraction (cmake/RowlocOptions.cmake). Contiguous columns: the loop vectorizes.
 ROWLOC_VECTOR_CLONES
-void SubtractSymmetricRankThree(double* p, const double* g, const double* k, const double* w, Eigen::Index n) {
+void SubtractSymmetricRankThree(double* __restrict__ p, const double* __restrict__ g, const double* __restrict__ k,
+                                const double* __restrict__ w, Eigen::Index n) {
   for (Eigen::Index c = 0; c < n; ++c) {
     const double gc = g[c], kc = k[c], wc = w[c];
-    double* column = p + c * n;
+    double* __restrict__ column = p + c * n;
     for (Eigen::Index r = 0; r < n; ++r) column[r] -= g[r] * gc + (k[r] * wc + w[r] * kc);
   }
 }
@@ -178,7 +179,7 @@ void SubtractSymmetricRankThree(double* p, const double* g, const double* k, con
 /// symmetric (KalmanUpdate's precondition); it stays exactly symmetric.
 template <typename Vector>
 void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Vector& u, double s, double y) {
-  const Vector gain = u / s;
+  const Vector gain = u * (1.0 / s);  // one division, not n (any gain is fine: the Joseph form)
   state.noalias() += y * gain;
   const Vector w = u - s * gain;
   const Vector root = std::sqrt(s) * gain;

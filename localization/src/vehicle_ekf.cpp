@@ -88,20 +88,18 @@ void VehicleEkf::Reset() {
 ProcessResult VehicleEkf::Process(const SensorMessage& message) {
   Validate(message);
   const double t = TimeOf(message);
-  ProcessResult result;
+  std::optional<std::string> gap_notice;
   if (initialised_ && t - time_s_ > config_.max_prediction_gap_s) {
     std::ostringstream notice;
     notice << "no message for " << t - time_s_ << " s (> max_prediction_gap_s " << config_.max_prediction_gap_s
            << "): state dropped, re-initialising from GNSS";
     Reset();
-    result.notice = notice.str();
+    gap_notice = notice.str();
   }
   if (initialised_) PredictTo(t);
   time_s_ = t;
-  ProcessResult applied = std::visit([this](const auto& m) { return Apply(m); }, message);
-  if (!result.notice) result.notice = applied.notice;
-  result.updates = std::move(applied.updates);
-  result.echo = std::move(applied.echo);
+  ProcessResult result = std::visit([this](const auto& m) { return Apply(m); }, message);
+  if (gap_notice) result.notice = std::move(gap_notice);  // the re-initialisation comes first
   ProjectStates();
   return result;
 }
