@@ -2,10 +2,12 @@
 // model and the Kalman update (internal header). For the filter's sizes (n ~ 10-30) Eigen's
 // expression set-up per column costs more than the arithmetic; these loops vectorize.
 //
-// ROWLOC_VECTOR_CLONES: put before a kernel (raw pointers, no Eigen expressions) to build it twice,
-// for baseline x86-64 (SSE2, 2 doubles per instruction) and for AVX2 (4), the copy chosen once at
-// load time by the CPU (GCC/Clang target_clones, an ifunc). Eigen's own code is not affected: its
-// vector width is fixed at compile time, and the project never builds with -march
+// ROWLOC_VECTOR_CLONES: put before a kernel (loops over raw pointers; Eigen only for coefficient
+// access) to build it twice, for baseline x86-64 (SSE2, 2 doubles per instruction) and for AVX2
+// (4), the copy chosen once at load time by the CPU (GCC/Clang target_clones, an ifunc). Only code
+// inlined into the kernel gets AVX2; out-of-line functions it calls keep the baseline target.
+// Eigen's own code is not affected: its vector width is fixed at compile time, and the project
+// never builds with -march
 // (cmake/RowlocOptions.cmake). AVX2 does not bring FMA, and the project builds with
 // -ffp-contract=off, so both copies round every operation alike: results (and replays) do not
 // depend on the machine. Elsewhere (other architectures, other compilers) the macro is empty.
