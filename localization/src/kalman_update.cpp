@@ -4,8 +4,10 @@
 
 #include <Eigen/Cholesky>
 
+#include <boost/container/small_vector.hpp>
 #include <boost/math/distributions/chi_squared.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -31,31 +33,70 @@ double ChiSquareGate(int dof, double probability) {
 
 namespace {
 
-/// target += M h_row^T for a square M (n x n) and row `row` of a sparse H: the columns of M at the
-/// non-zero entries of that row, up to kMaxCombinedColumns of them in one pass over target.
-ROWLOC_VECTOR_CLONES
-void AddSparseColumn(const Eigen::MatrixXd& m, const MatrixRef& h, Eigen::Index row, double* target) {
-  const double* sources[detail::kMaxCombinedColumns];
-  double scales[detail::kMaxCombinedColumns];
-  int count = 0;
-  for (Eigen::Index j = 0; j < h.cols(); ++j) {
-    const double factor = h(row, j);
-    if (factor == 0.0) continue;
-    sources[count] = m.col(j).data();
-    scales[count] = factor;
-    if (++count == detail::kMaxCombinedColumns) {
-      detail::CombineColumns<true>(sources, scales, count, m.rows(), target);
-      count = 0;
+/// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 23).
+constexpr int kStackStates = 32;
+constexpr int kStackMeasurements = 8;
+
+/// The non-zero entries of each row of a Jacobian H (m x n), row by row: the measurement models'
+/// H has a few non-zeros per row (3-8 of 10-30 states), so its products take O(nnz) each.
+class SparseRows {
+ public:
+  explicit SparseRows(const MatrixRef& h)
+      : start_(Slot(h.rows() + 1), boost::container::default_init),
+        column_(Slot(h.size()), boost::container::default_init),
+        value_(Slot(h.size()), boost::container::default_init) {
+    Eigen::Index count = 0;
+    for (Eigen::Index i = 0; i < h.rows(); ++i) {
+      start_[Slot(i)] = count;
+      const double* entry = h.data() + i;  // h(i, j) = entry[j * stride]
+      for (Eigen::Index j = 0; j < h.cols(); ++j, entry += h.outerStride()) {
+        if (*entry == 0.0) continue;
+        column_[Slot(count)] = j;
+        value_[Slot(count++)] = *entry;
+      }
     }
+    start_[Slot(h.rows())] = count;
   }
-  if (count > 0) detail::CombineColumns<true>(sources, scales, count, m.rows(), target);
+  /// h_i . v for a vector v of the state's size.
+  double Dot(Eigen::Index i, const double* v) const {
+    double sum = 0.0;
+    for (Eigen::Index e = Begin(i); e < End(i); ++e) sum += value_[Slot(e)] * v[column_[Slot(e)]];
+    return sum;
+  }
+  /// target = M h_i^T for a square column-major M (n x n): the columns of M at the non-zeros of
+  /// row i, up to kMaxCombinedColumns of them per pass over target (column_kernels.hpp).
+  void TimesTransposed(const Eigen::MatrixXd& m, Eigen::Index i, double* target) const {
+    std::fill(target, target + m.rows(), 0.0);
+    AddColumns(m, Begin(i), End(i), target);
+  }
+
+ private:
+  static std::size_t Slot(Eigen::Index e) { return static_cast<std::size_t>(e); }
+  Eigen::Index Begin(Eigen::Index i) const { return start_[Slot(i)]; }
+  Eigen::Index End(Eigen::Index i) const { return start_[Slot(i) + 1]; }
+  ROWLOC_VECTOR_CLONES
+  void AddColumns(const Eigen::MatrixXd& m, Eigen::Index begin, Eigen::Index end, double* target) const;
+
+  // Sized once (m x n entries at most): up to the stack sizes of KalmanUpdate nothing is allocated.
+  boost::container::small_vector<Eigen::Index, kStackMeasurements + 1> start_;  ///< row i: [start_i, start_i+1)
+  boost::container::small_vector<Eigen::Index, kStackStates * kStackMeasurements> column_;
+  boost::container::small_vector<double, kStackStates * kStackMeasurements> value_;
+};
+
+void SparseRows::AddColumns(const Eigen::MatrixXd& m, Eigen::Index begin, Eigen::Index end, double* target) const {
+  const double* sources[detail::kMaxCombinedColumns];
+  for (Eigen::Index first = begin; first < end; first += detail::kMaxCombinedColumns) {
+    const int count = static_cast<int>(std::min<Eigen::Index>(end - first, detail::kMaxCombinedColumns));
+    for (int e = 0; e < count; ++e) sources[e] = m.col(column_[Slot(first + e)]).data();
+    detail::CombineColumns<true>(sources, value_.data() + first, count, m.rows(), target);
+  }
 }
 
 /// M H^T (n x m): column i is M h_i^T.
 template <typename Tall>
-Tall TimesTransposed(const Eigen::MatrixXd& m, const MatrixRef& h) {
-  Tall out = Tall::Zero(m.rows(), h.rows());
-  for (Eigen::Index i = 0; i < h.rows(); ++i) AddSparseColumn(m, h, i, out.col(i).data());
+Tall TimesTransposed(const Eigen::MatrixXd& m, const SparseRows& h, Eigen::Index rows) {
+  Tall out(m.rows(), rows);
+  for (Eigen::Index i = 0; i < rows; ++i) h.TimesTransposed(m, i, out.col(i).data());
   return out;
 }
 
@@ -103,7 +144,7 @@ bool GateJointly(const Eigen::MatrixXd& covariance, const VectorRef& innovation,
                  const MatrixRef& noise, double gate_threshold, JointStatistics<Tall, Square>& joint,
                  UpdateOutcome& outcome) {
   outcome.innovation = innovation;
-  joint.pht = TimesTransposed<Tall>(covariance, jacobian);
+  joint.pht = TimesTransposed<Tall>(covariance, SparseRows(jacobian), jacobian.rows());
   joint.s = noise;
   joint.s.noalias() += jacobian.lazyProduct(joint.pht);  // m x m, tiny
   joint.s = (0.5 * (joint.s + joint.s.transpose())).eval();
@@ -150,40 +191,91 @@ UpdateOutcome UpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, co
   return outcome;
 }
 
+/// y += a x over n entries.
+void Axpy(double a, const double* __restrict__ x, double* __restrict__ y, Eigen::Index n) {
+  for (Eigen::Index r = 0; r < n; ++r) y[r] += a * x[r];
+}
+
+/// The vectors of one scalar correction from u = P h^T and s = h u + r > 0: the gain k = u / s (one
+/// division, not n: any gain is fine for the Joseph form), w = u - k s and g = sqrt(s) k.
+void ScalarGain(const double* __restrict__ u, double s, Eigen::Index n, double* __restrict__ k,
+                double* __restrict__ w, double* __restrict__ g) {
+  const double inverse = 1.0 / s, root = std::sqrt(s);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    k[r] = u[r] * inverse;
+    w[r] = u[r] - s * k[r];
+    g[r] = root * k[r];
+  }
+}
+
+/// p -= sum over the Count correction columns e of g_e g_e^T + (k_e w_e^T + w_e k_e^T), entry (r, c)
+/// summed in a register in the order of e; g, k, w hold Count columns of length n (leading dimension
+/// n). Entry (c, r) takes the same products and addends in commuted order, and IEEE products and
+/// sums commute: a symmetric P stays exactly symmetric without a mirroring pass (its strided stores
+/// cost as much as the update). That needs every product rounded on its own: no FMA contraction
+/// (cmake/RowlocOptions.cmake). Count is a compile-time constant, so the sum unrolls and the loop
+/// over the contiguous rows vectorizes. Each Count is its own cloned function: its restrict
+/// parameters spare the loop the run-time aliasing checks an inlined copy would get.
+template <int Count>
+ROWLOC_VECTOR_CLONES void SubtractSymmetricCorrectionsOf(double* __restrict__ p, const double* __restrict__ g,
+                                           const double* __restrict__ k, const double* __restrict__ w,
+                                           Eigen::Index n) {
+  for (Eigen::Index c = 0; c < n; ++c) {
+    double gc[Count], kc[Count], wc[Count];
+    for (int e = 0; e < Count; ++e) {
+      gc[e] = g[e * n + c];
+      kc[e] = k[e * n + c];
+      wc[e] = w[e * n + c];
+    }
+    double* __restrict__ column = p + c * n;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      double sum = g[r] * gc[0] + (k[r] * wc[0] + w[r] * kc[0]);
+      for (int e = 1; e < Count; ++e) sum += g[e * n + r] * gc[e] + (k[e * n + r] * wc[e] + w[e * n + r] * kc[e]);
+      column[r] -= sum;
+    }
+  }
+}
+
+/// SubtractSymmetricCorrectionsOf for any count >= 1: one pass over P per kMaxCombinedColumns
+/// corrections (each pass keeps P exactly symmetric).
+void SubtractSymmetricCorrections(double* p, const double* g, const double* k, const double* w, Eigen::Index n,
+                                  Eigen::Index count) {
+  for (Eigen::Index first = 0; first < count; first += detail::kMaxCombinedColumns) {
+    const double* gs = g + first * n;
+    const double* ks = k + first * n;
+    const double* ws = w + first * n;
+    switch (std::min<Eigen::Index>(count - first, detail::kMaxCombinedColumns)) {
+      case 1: SubtractSymmetricCorrectionsOf<1>(p, gs, ks, ws, n); break;
+      case 2: SubtractSymmetricCorrectionsOf<2>(p, gs, ks, ws, n); break;
+      case 3: SubtractSymmetricCorrectionsOf<3>(p, gs, ks, ws, n); break;
+      case 4: SubtractSymmetricCorrectionsOf<4>(p, gs, ks, ws, n); break;
+      case 5: SubtractSymmetricCorrectionsOf<5>(p, gs, ks, ws, n); break;
+      case 6: SubtractSymmetricCorrectionsOf<6>(p, gs, ks, ws, n); break;
+      case 7: SubtractSymmetricCorrectionsOf<7>(p, gs, ks, ws, n); break;
+      default: SubtractSymmetricCorrectionsOf<detail::kMaxCombinedColumns>(p, gs, ks, ws, n); break;
+    }
+  }
+}
+
 /// u = P h^T for row `row` of the sparse H.
 template <typename Vector>
 Vector SparseColumn(const Eigen::MatrixXd& covariance, const MatrixRef& jacobian, Eigen::Index row) {
-  Vector u = Vector::Zero(covariance.rows());
-  AddSparseColumn(covariance, jacobian, row, u.data());
+  Vector u(covariance.rows());
+  SparseRows(jacobian).TimesTransposed(covariance, row, u.data());
   return u;
-}
-
-/// P <- P - g g^T - (k w^T + w k^T) on every entry of the n x n column-major p. Entry (r, c) is
-/// g_r g_c + (k_r w_c + w_r k_c), the same products and addends as entry (c, r) in commuted order,
-/// and IEEE products and sums commute: a symmetric P stays exactly symmetric without a mirroring
-/// pass (its strided stores cost as much as the update). That needs every product rounded on its
-/// own: no FMA contraction (cmake/RowlocOptions.cmake). Contiguous columns: the loop vectorizes.
-ROWLOC_VECTOR_CLONES
-void SubtractSymmetricRankThree(double* __restrict__ p, const double* __restrict__ g, const double* __restrict__ k,
-                                const double* __restrict__ w, Eigen::Index n) {
-  for (Eigen::Index c = 0; c < n; ++c) {
-    const double gc = g[c], kc = k[c], wc = w[c];
-    double* __restrict__ column = p + c * n;
-    for (Eigen::Index r = 0; r < n; ++r) column[r] -= g[r] * gc + (k[r] * wc + w[r] * kc);
-  }
 }
 
 /// One scalar correction with u = P h^T and s = h u + r > 0: k = u / s, x <- x + k y and the Joseph
 /// form P - k u^T - w k^T with w = u - k s (zero up to round-off), which is the symmetric
 /// P - s k k^T - (k w^T + w k^T) = P - g g^T - (k w^T + w k^T) with g = sqrt(s) k. P must be
-/// symmetric (KalmanUpdate's precondition); it stays exactly symmetric.
+/// symmetric (KalmanUpdate's precondition); it stays exactly symmetric (SubtractSymmetricCorrections).
 template <typename Vector>
 void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Vector& u, double s, double y) {
-  const Vector gain = u * (1.0 / s);  // one division, not n (any gain is fine: the Joseph form)
-  state.noalias() += y * gain;
-  const Vector w = u - s * gain;
-  const Vector root = std::sqrt(s) * gain;
-  SubtractSymmetricRankThree(covariance.data(), root.data(), gain.data(), w.data(), state.size());
+  const Eigen::Index n = state.size();
+  Vector gain(n), w(n), root(n);
+  ScalarGain(u.data(), s, n, gain.data(), w.data(), root.data());
+  Axpy(y, gain.data(), state.data(), n);
+  SubtractSymmetricCorrections(covariance.data(), root.data(), gain.data(), w.data(), n, 1);
 }
 
 /// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is
@@ -209,29 +301,56 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
   return outcome;
 }
 
-/// The update of m > 1 measurements with a diagonal R (every R_ii > 0): gated on the joint NIS
-/// (S = H P H^T + R, m x m, Cholesky), then applied as m sequential scalar corrections at the same
-/// linearization point, the i-th with the innovation y_i - h_i (x - x_0) left after the first i - 1.
-/// For a linearized measurement with independent components this equals the joint update
-/// (sequential Kalman filtering: Simon, Optimal State Estimation, 2006, §6.1) and costs m scalar
-/// O(n^2) updates, with no m x m solves and no rank-2m temporaries. Tall: n x m; Square: m x m;
+/// The update of m measurements with a diagonal R: m sequential scalar corrections at one
+/// linearization point (sequential Kalman filtering: Simon, Optimal State Estimation, 2006, §6.1),
+/// equal to the joint update for a linearized measurement with independent components. Correction i
+/// has u_i = P_(i-1) h_i^T, s_i = h_i u_i + R_ii, k_i = u_i / s_i and the innovation
+/// y_i - h_i (x_(i-1) - x_0); its Joseph form is P_i = P_(i-1) - g_i g_i^T - (k_i w_i^T + w_i k_i^T)
+/// with g_i = sqrt(s_i) k_i and w_i = u_i - k_i s_i (zero up to round-off).
+/// All corrections are computed before P changes: with U = P H^T (sparse H),
+///   u_i = U_i - sum_(j<i) g_j (g_j . h_i)
+/// (the w_j terms of P_(i-1) are round-off, |w_j| ~ eps |u_j|, below the rounding of this sum), and
+/// then applied to P in one pass (SubtractSymmetricCorrections). The s_i are the pivots of the LDL^T
+/// factorization of S = H P H^T + R, so S is positive definite iff every s_i > 0, and the joint
+/// NIS y^T S^-1 y is sum_i y_i'^2 / s_i (the chain rule of the Gaussian likelihood): the gate needs
+/// no factorization, and a gated update leaves x and P untouched. Tall: n x m; Square: m x m;
 /// Vector: n.
 template <typename Tall, typename Square, typename Vector>
 UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
                                    const VectorRef& innovation, const MatrixRef& jacobian,
                                    const MatrixRef& noise, double gate_threshold, int angle_index) {
+  const Eigen::Index n = state.size();
+  const Eigen::Index m = innovation.size();
+  const SparseRows h(jacobian);
   UpdateOutcome outcome;
-  JointStatistics<Tall, Square> joint;
-  if (!GateJointly(covariance, innovation, jacobian, noise, gate_threshold, joint, outcome)) return outcome;
-  const Tall& pht = joint.pht;
-  const Vector start = state;  // the linearization point (not wrapped between the corrections)
-  for (Eigen::Index i = 0; i < innovation.size(); ++i) {
-    const Vector u = i == 0 ? Vector(pht.col(0)) : SparseColumn<Vector>(covariance, jacobian, i);
-    const double s_i = jacobian.row(i).dot(u) + noise(i, i);  // >= R_ii > 0
-    const double y_i = innovation(i) - jacobian.row(i).dot(state - start);
-    ApplyScalarCorrection(state, covariance, u, s_i, y_i);
+  outcome.innovation = innovation;
+  Tall u = TimesTransposed<Tall>(covariance, h, m);  // U = P H^T, then column i becomes u_i
+  Square s(m, m);  // S = H P H^T + R (R diagonal), computed on the upper triangle: exactly symmetric
+  for (Eigen::Index j = 0; j < m; ++j) {
+    for (Eigen::Index i = 0; i <= j; ++i) s(i, j) = s(j, i) = h.Dot(i, u.col(j).data()) + noise(i, j);
   }
+  outcome.innovation_covariance = s;
+  Tall root(n, m), gain(n, m), residual(n, m);  // g_i, k_i, w_i
+  Vector shift = Vector::Zero(n);               // x_(i-1) - x_0
+  double nis = 0.0;
+  for (Eigen::Index i = 0; i < m; ++i) {
+    double* u_i = u.col(i).data();
+    for (Eigen::Index j = 0; j < i; ++j) Axpy(-h.Dot(i, root.col(j).data()), root.col(j).data(), u_i, n);
+    const double s_i = h.Dot(i, u_i) + noise(i, i);
+    if (!(s_i > 0.0)) {
+      outcome.nis = std::numeric_limits<double>::infinity();
+      return outcome;  // S not positive definite: never apply such an update
+    }
+    const double y_i = innovation(i) - h.Dot(i, shift.data());
+    nis += y_i * (y_i / s_i);
+    ScalarGain(u_i, s_i, n, gain.col(i).data(), residual.col(i).data(), root.col(i).data());
+    Axpy(y_i, gain.col(i).data(), shift.data(), n);
+  }
+  outcome.nis = nis;
+  if (!(nis <= gate_threshold)) return outcome;
+  state += shift;
   if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
+  SubtractSymmetricCorrections(covariance.data(), root.data(), gain.data(), residual.data(), n, m);
   outcome.accepted = true;
   return outcome;
 }
@@ -245,10 +364,6 @@ bool IsPositiveDiagonal(const MatrixRef& noise) {
   }
   return true;
 }
-
-/// Largest state and measurement sizes served by stack temporaries (all shipped vehicles: n <= 23).
-constexpr int kStackStates = 32;
-constexpr int kStackMeasurements = 8;
 
 }  // namespace
 
@@ -274,12 +389,16 @@ UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
     return ScalarUpdateWith<Eigen::VectorXd>(state, covariance, innovation, jacobian, noise(0, 0), gate_threshold,
                                              angle_index);
   }
-  if (n <= kStackStates && m <= kStackMeasurements && IsPositiveDiagonal(noise)) {
-    using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;
-    using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackMeasurements, kStackMeasurements>;
-    using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kStackStates, 1>;
-    return SequentialUpdateWith<Tall, Square, Vector>(state, covariance, innovation, jacobian, noise, gate_threshold,
-                                                      angle_index);
+  if (IsPositiveDiagonal(noise)) {  // independent components: sequential corrections
+    if (n <= kStackStates && m <= kStackMeasurements) {
+      using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;
+      using Square = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackMeasurements, kStackMeasurements>;
+      using Vector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kStackStates, 1>;
+      return SequentialUpdateWith<Tall, Square, Vector>(state, covariance, innovation, jacobian, noise,
+                                                        gate_threshold, angle_index);
+    }
+    return SequentialUpdateWith<Eigen::MatrixXd, Eigen::MatrixXd, Eigen::VectorXd>(
+        state, covariance, innovation, jacobian, noise, gate_threshold, angle_index);
   }
   if (n <= kStackStates && m <= kStackMeasurements) {
     using Tall = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kStackStates, kStackMeasurements>;

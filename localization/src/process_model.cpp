@@ -4,6 +4,7 @@
 
 #include "column_kernels.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -17,7 +18,8 @@ BaseJacobian PropagateState(Eigen::VectorXd& x, double dt) {
   const double c = std::cos(mid), s = std::sin(mid);
   const double east_rate = vx * c - vy * s;   // X' at mid-step heading
   const double north_rate = vx * s + vy * c;  // Y'
-  BaseJacobian f = BaseJacobian::Identity();
+  BaseJacobian f = BaseJacobian::Zero();  // the identity, set as zeros and a diagonal (Identity() is not vectorized)
+  f.diagonal().setOnes();
   f(L::kX, L::kPhi) = -dt * north_rate;
   f(L::kX, L::kYawRate) = -0.5 * dt * dt * north_rate;
   f(L::kX, L::kVx) = dt * c;
@@ -132,6 +134,7 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
   Columns c(n, kCoupled);
   CoupledColumns(f, p.data(), n, c.data());
+  const double* const source = c.data();  // c(j, b) = source[b * n + j]
   std::array<std::array<double, kCoupled>, kCoupled> block;  // upper triangle (a <= b) only
   for (int a = 0; a < kCoupled; ++a) {
     const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];
@@ -139,15 +142,20 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
       double sum = 0.0;
       for (int e = 0; e < row.count; ++e) {
         const int j = row.columns[static_cast<std::size_t>(e)];
-        sum += f(a, j) * c(j, b);
+        sum += f(a, j) * source[b * n + j];
       }
       block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] = sum;
     }
   }
-  // The coupled states' columns are c and their rows, by symmetry, c^T, written column by column
-  // (kCoupled contiguous entries each).
-  p.leftCols<kCoupled>() = c;
-  p.topRows<kCoupled>() = c.transpose();
+  // The coupled states' columns are c (the leading kCoupled columns of the column-major P: one
+  // contiguous block) and their rows, by symmetry, c^T, written column by column (kCoupled
+  // contiguous entries each; plain loops: Eigen's block assignments cost about three times as
+  // much at these sizes, docs/benchmarks.md). The block then overwrites the leading corner.
+  double* const target = p.data();
+  std::copy(source, source + kCoupled * n, target);
+  for (Eigen::Index col = kCoupled; col < n; ++col) {
+    for (Eigen::Index k = 0; k < kCoupled; ++k) target[col * n + k] = source[k * n + col];
+  }
   for (int a = 0; a < kCoupled; ++a) {
     const auto& block_row = block[static_cast<std::size_t>(a)];
     for (int b = a; b < kCoupled; ++b) p(a, b) = p(b, a) = block_row[static_cast<std::size_t>(b)];

@@ -80,16 +80,23 @@ TEST(KalmanUpdate, EqualsTheTextbookJosephUpdate) {
   }
 }
 
-// A diagonal R takes the sequential path (m scalar corrections at one linearization point): the
-// same result as the joint textbook update (n = 40 is beyond the stack limit: the joint path).
+// A random problem with a diagonal R (variances from 1e-4 to 10).
+Problem RandomDiagonalProblem(Eigen::Index n, Eigen::Index m, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> log_scale(-4.0, 1.0);
+  Problem pr = RandomProblem(n, m, rng);
+  pr.r = Eigen::MatrixXd::Zero(m, m);
+  for (Eigen::Index i = 0; i < m; ++i) pr.r(i, i) = std::pow(10.0, log_scale(rng));
+  return pr;
+}
+
+// A diagonal R takes the sequential path (m scalar corrections at one linearization point, applied
+// to P in one pass per 8 of them): the same result as the joint textbook update. n = 40 and m > 8
+// are beyond the stack temporaries; m = 9, 10 take two passes over P.
 TEST(KalmanUpdate, DiagonalNoiseEqualsTheTextbookJosephUpdate) {
   std::mt19937_64 rng(20261201);
-  std::uniform_real_distribution<double> log_scale(-4.0, 1.0);
   for (const Eigen::Index n : {3, 9, 14, 23, 40}) {
-    for (Eigen::Index m = 2; m <= 8; ++m) {
-      Problem pr = RandomProblem(n, m, rng);
-      pr.r = Eigen::MatrixXd::Zero(m, m);
-      for (Eigen::Index i = 0; i < m; ++i) pr.r(i, i) = std::pow(10.0, log_scale(rng));
+    for (Eigen::Index m = 2; m <= 10; ++m) {
+      const Problem pr = RandomDiagonalProblem(n, m, rng);
       const Eigen::MatrixXd s = pr.h * pr.p * pr.h.transpose() + pr.r;
       const Eigen::MatrixXd k = pr.p * pr.h.transpose() * s.inverse();
       const Eigen::MatrixXd i_kh = Eigen::MatrixXd::Identity(n, n) - k * pr.h;
@@ -160,6 +167,29 @@ TEST(KalmanUpdate, GatedMeasurementLeavesStateAndCovarianceUntouched) {
     EXPECT_TRUE(in.accepted);
     EXPECT_NEAR(in.nis, nis, 1e-12 * nis);
     EXPECT_FALSE(BitIdentical(p, pr.p));
+  }
+}
+
+// The sequential path gates on the joint NIS (the sum of the sequential y_i^2 / s_i) before it
+// changes anything.
+TEST(KalmanUpdate, DiagonalNoiseIsGatedOnTheJointNis) {
+  std::mt19937_64 rng(11);
+  for (Eigen::Index m = 2; m <= 10; ++m) {
+    const Problem pr = RandomDiagonalProblem(14, m, rng);
+    const Eigen::MatrixXd s = pr.h * pr.p * pr.h.transpose() + pr.r;
+    const double nis = pr.y.dot(s.inverse() * pr.y);
+    Eigen::VectorXd x = pr.x;
+    Eigen::MatrixXd p = pr.p;
+    const UpdateOutcome out = KalmanUpdate(x, p, pr.y, pr.h, pr.r, 0.999 * nis, 2);
+    EXPECT_FALSE(out.accepted) << "m " << m;
+    EXPECT_NEAR(out.nis, nis, 1e-10 * nis) << "m " << m;
+    EXPECT_TRUE(BitIdentical(x, pr.x)) << "m " << m;
+    EXPECT_TRUE(BitIdentical(p, pr.p)) << "m " << m;
+    EXPECT_LT(RelativeError(out.innovation_covariance, s), 1e-12) << "m " << m;
+    EXPECT_TRUE(BitIdentical(out.innovation_covariance, out.innovation_covariance.transpose())) << "m " << m;
+    const UpdateOutcome in = KalmanUpdate(x, p, pr.y, pr.h, pr.r, 1.001 * nis, 2);
+    EXPECT_TRUE(in.accepted) << "m " << m;
+    EXPECT_FALSE(BitIdentical(p, pr.p)) << "m " << m;
   }
 }
 

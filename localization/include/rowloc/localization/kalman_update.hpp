@@ -12,14 +12,18 @@
 //   P <- P - K U^T - (U - K S) K^T          (valid for any gain K, like the product form)
 // on the upper triangle only, mirrored to the lower: O(nnz(H) n + m n^2) instead of O(n^3), and P
 // exactly symmetric. Two cheaper paths give the same result: a scalar measurement (m = 1) needs no
-// factorization; m > 1 components with a diagonal R are gated on the joint NIS above and then
-// applied as m scalar corrections at the same linearization point (sequential Kalman filtering,
-// Simon, Optimal State Estimation, 2006, §6.1), each
-//   k = u / s, u = P h^T, s = h u + r,   P <- P - g g^T - (k w^T + w k^T),  w = u - k s,
-// with g = sqrt(s) k (s k k^T = g g^T), the same Joseph identity for m = 1. Every entry of that
-// correction is computed alike for (r, c) and (c, r), so these paths need a symmetric P and keep
-// it exactly symmetric without a mirroring pass (the filter's P always is: PredictStep and SetPose
-// keep it so). The heading (state index angle_index) is wrapped to (-pi, pi] after the correction.
+// factorization; m > 1 components with a diagonal R are m scalar corrections at the same
+// linearization point (sequential Kalman filtering, Simon, Optimal State Estimation, 2006, §6.1),
+// correction i with
+//   u = P_(i-1) h_i^T, s = h_i u + R_ii, k = u / s,   P_i = P_(i-1) - g g^T - (k w^T + w k^T),
+// w = u - k s, g = sqrt(s) k (s k k^T = g g^T): the same Joseph identity for m = 1. The s_i are
+// the pivots of the LDL^T factorization of S, so the joint NIS is sum_i y_i'^2 / s_i (y_i' the
+// innovation left after the first i - 1 corrections) and the gate needs no factorization; all
+// corrections are computed from U = P H^T before P changes and then applied in one pass over P.
+// Every entry of these corrections is computed alike for (r, c) and (c, r), so these paths need a
+// symmetric P and keep it exactly symmetric without a mirroring pass (the filter's P always is:
+// PredictStep and SetPose keep it so). The heading (state index angle_index) is wrapped to
+// (-pi, pi] after the correction.
 #pragma once
 
 #include <Eigen/Core>
