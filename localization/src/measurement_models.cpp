@@ -9,8 +9,10 @@ using L = StateLayout;
 
 namespace {
 
-LinearizedMeasurement Zeros(Eigen::Index rows, Eigen::Index cols) {
-  return {Eigen::VectorXd::Zero(rows), Eigen::MatrixXd::Zero(rows, cols)};
+/// out = zeros of rows x cols (h) and rows (H); resizes only on a size change.
+void SetZero(LinearizedMeasurement& out, Eigen::Index rows, Eigen::Index cols) {
+  out.predicted.setZero(rows);
+  out.jacobian.setZero(rows, cols);
 }
 
 double SteeringAngle(const Eigen::VectorXd& x, const StateLayout& layout, std::size_t i) {
@@ -34,19 +36,18 @@ WheelCentre CentreOf(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
 
 }  // namespace
 
-LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
-  LinearizedMeasurement m = Zeros(2, x.size());
+void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, LinearizedMeasurement& m) {
+  SetZero(m, 2, x.size());
   const double c = std::cos(x(L::kPhi)), s = std::sin(x(L::kPhi));
   m.predicted << x(L::kX) + c * l.x() - s * l.y(), x(L::kY) + s * l.x() + c * l.y();
   m.jacobian(0, L::kX) = 1.0;
   m.jacobian(1, L::kY) = 1.0;
   m.jacobian(0, L::kPhi) = -s * l.x() - c * l.y();
   m.jacobian(1, L::kPhi) = c * l.x() - s * l.y();
-  return m;
 }
 
-LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, int accel_bias_index) {
-  LinearizedMeasurement m = Zeros(3, x.size());
+void ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, int accel_bias_index, LinearizedMeasurement& m) {
+  SetZero(m, 3, x.size());
   const double r = x(L::kYawRate);
   m.predicted << x(L::kAx) - r * r * l.x(), x(L::kAy) - r * r * l.y(), r + x(L::kGyroBias);
   m.jacobian(0, L::kAx) = 1.0;
@@ -61,7 +62,6 @@ LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& 
     m.jacobian(0, accel_bias_index) = 1.0;
     m.jacobian(1, accel_bias_index + 1) = 1.0;
   }
-  return m;
 }
 
 double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
@@ -74,15 +74,15 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
   return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
 }
 
-LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
-                                      const StateLayout& layout,
-                                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s) {
+void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
+                     const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s,
+                     LinearizedMeasurement& m) {
   const std::size_t n = vehicle.wheels.size();
   if (torque_nm && torque_nm->size() != n) throw std::invalid_argument("wheel model: one torque per wheel");
   if (!(std::isfinite(encoder_lag_s) && encoder_lag_s >= 0.0)) {
     throw std::invalid_argument("wheel model: encoder lag must be finite and >= 0");
   }
-  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
+  SetZero(m, static_cast<Eigen::Index>(n), x.size());
   const double tau = encoder_lag_s, r = x(L::kYawRate), vx = x(L::kVx), vy = x(L::kVy);
   const double ax = x(L::kAx) + r * vy, ay = x(L::kAy) - r * vx;  // d(vx, vy)/dt of the motion model
   for (std::size_t i = 0; i < n; ++i) {
@@ -113,13 +113,12 @@ LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::Veh
       m.jacobian(row, layout.steering[i]) = dv * (w.lateral() - tau * (-s * ax + c * ay));
     }
   }
-  return m;
 }
 
-LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
-                                                const StateLayout& layout) {
+void WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                               const StateLayout& layout, LinearizedMeasurement& m) {
   const std::size_t n = vehicle.wheels.size();
-  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(n), x.size());
+  SetZero(m, static_cast<Eigen::Index>(n), x.size());
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
@@ -131,29 +130,68 @@ LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const 
     m.jacobian(row, L::kYawRate) = s * l.y() + c * l.x();
     if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) = -w.longitudinal();  // d lateral / d delta
   }
-  return m;
 }
 
-LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
-                                    const std::vector<std::size_t>& wheels) {
-  LinearizedMeasurement m = Zeros(static_cast<Eigen::Index>(wheels.size()), x.size());
+void SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout, const std::vector<std::size_t>& wheels,
+                   LinearizedMeasurement& m) {
+  SetZero(m, static_cast<Eigen::Index>(wheels.size()), x.size());
   for (std::size_t j = 0; j < wheels.size(); ++j) {
     const int index = layout.steering.at(wheels[j]);
     if (index < 0) throw std::invalid_argument("steering model: wheel is not steerable");
     m.predicted(static_cast<Eigen::Index>(j)) = x(index);
     m.jacobian(static_cast<Eigen::Index>(j), index) = 1.0;
   }
-  return m;
 }
 
-LinearizedMeasurement VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l) {
-  LinearizedMeasurement m = Zeros(2, x.size());
+void VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, LinearizedMeasurement& m) {
+  SetZero(m, 2, x.size());
   const double r = x(L::kYawRate);
   m.predicted << x(L::kVx) - r * l.y(), x(L::kVy) + r * l.x();
   m.jacobian(0, L::kVx) = 1.0;
   m.jacobian(0, L::kYawRate) = -l.y();
   m.jacobian(1, L::kVy) = 1.0;
   m.jacobian(1, L::kYawRate) = l.x();
+}
+
+// The value-returning forms.
+
+LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m) {
+  LinearizedMeasurement m;
+  GpsAntennaModel(x, lever_arm_m, m);
+  return m;
+}
+
+LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int accel_bias_index) {
+  LinearizedMeasurement m;
+  ImuModel(x, lever_arm_m, accel_bias_index, m);
+  return m;
+}
+
+LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                      const StateLayout& layout,
+                                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s) {
+  LinearizedMeasurement m;
+  WheelSpeedModel(x, vehicle, layout, torque_nm, encoder_lag_s, m);
+  return m;
+}
+
+LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                                                const StateLayout& layout) {
+  LinearizedMeasurement m;
+  WheelLateralVelocityModel(x, vehicle, layout, m);
+  return m;
+}
+
+LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
+                                    const std::vector<std::size_t>& wheels) {
+  LinearizedMeasurement m;
+  SteeringModel(x, layout, wheels, m);
+  return m;
+}
+
+LinearizedMeasurement VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m) {
+  LinearizedMeasurement m;
+  VioModel(x, lever_arm_m, m);
   return m;
 }
 

@@ -126,39 +126,32 @@ void CoupledColumns(const BaseJacobian& f, const double* __restrict__ p, Eigen::
 
 /// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns c_k of
 /// P F^T (CoupledColumns): since P is symmetric, row and column k of F P F^T are c_k outside the
-/// coupled block, and the block is B(a, b) = sum_j f(a, j) c_b(j), computed for a <= b and written
-/// to both triangles (P stays exactly symmetric). O(nnz(f) n) on contiguous columns instead of
+/// coupled block, and the block is B(a, b) = sum_j f(a, j) c_b(j), whose upper triangle (a <= b)
+/// is written to both triangles (P stays exactly symmetric). O(nnz(f) n) on contiguous columns instead of
 /// O(9^2 n). Columns: an n x kCoupled matrix type.
 template <typename Columns>
 void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
   Columns c(n, kCoupled);
   CoupledColumns(f, p.data(), n, c.data());
-  const double* const source = c.data();  // c(j, b) = source[b * n + j]
-  std::array<std::array<double, kCoupled>, kCoupled> block;  // upper triangle (a <= b) only
-  for (int a = 0; a < kCoupled; ++a) {
-    const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];
-    for (int b = a; b < kCoupled; ++b) {
-      double sum = 0.0;
-      for (int e = 0; e < row.count; ++e) {
-        const int j = row.columns[static_cast<std::size_t>(e)];
-        sum += f(a, j) * source[b * n + j];
-      }
-      block[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] = sum;
-    }
-  }
+  // The block F_(coupled, :) C_(base, :): the coupled rows of f only reach the base states, the
+  // first kBase rows of c (a fixed-size product; f's zeros add exact zeros).
+  constexpr int kBase = BaseJacobian::ColsAtCompileTime;
+  const Eigen::Map<const Eigen::Matrix<double, kBase, kCoupled>, 0, Eigen::OuterStride<>> c_base(
+      c.data(), Eigen::OuterStride<>(n));  // n >= kBase: every layout starts with the base states
+  const Eigen::Matrix<double, kCoupled, kCoupled> block = f.topRows<kCoupled>().lazyProduct(c_base);
   // The coupled states' columns are c (the leading kCoupled columns of the column-major P: one
   // contiguous block) and their rows, by symmetry, c^T, written column by column (kCoupled
   // contiguous entries each; plain loops: Eigen's block assignments cost about three times as
   // much at these sizes, docs/benchmarks.md). The block then overwrites the leading corner.
   double* const target = p.data();
+  const double* const source = c.data();
   std::copy(source, source + kCoupled * n, target);
   for (Eigen::Index col = kCoupled; col < n; ++col) {
     for (Eigen::Index k = 0; k < kCoupled; ++k) target[col * n + k] = source[k * n + col];
   }
-  for (int a = 0; a < kCoupled; ++a) {
-    const auto& block_row = block[static_cast<std::size_t>(a)];
-    for (int b = a; b < kCoupled; ++b) p(a, b) = p(b, a) = block_row[static_cast<std::size_t>(b)];
+  for (int b = 0; b < kCoupled; ++b) {
+    for (int a = 0; a <= b; ++a) p(a, b) = p(b, a) = block(a, b);  // the upper triangle, mirrored
   }
 }
 

@@ -129,7 +129,8 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
     return result;
   }
   const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
-  const LinearizedMeasurement h = GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>());
+  LinearizedMeasurement& h = update_buffers_.model;
+  GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), h);
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
   double gate = gate_gps_;
@@ -155,12 +156,14 @@ ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
   if (!initialised_) return result;
   // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
   const Eigen::Vector2d force = Rotation(vehicle_.imu.yaw_rad) * Eigen::Vector2d(imu.accel_x_mps2, imu.accel_y_mps2);
-  Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
-  const LinearizedMeasurement h = ImuModel(x_, vehicle_.imu.position_m.head<2>(), layout_.accel_bias);
+  const Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
+  LinearizedMeasurement& h = update_buffers_.model;
+  ImuModel(x_, vehicle_.imu.position_m.head<2>(), layout_.accel_bias, h);
   const double a = config_.imu.accel_sigma_mps2 * config_.imu.accel_sigma_mps2;
   const double g = config_.imu.gyro_sigma_radps * config_.imu.gyro_sigma_radps;
   const Eigen::Matrix3d noise = Eigen::Vector3d(a, a, g).asDiagonal();
-  result.updates.push_back(Update(imu.time_s, imu.sensor, z - h.predicted, h.jacobian, noise, gate_imu_));
+  const Eigen::Vector3d innovation = z - h.predicted;
+  result.updates.push_back(Update(imu.time_s, imu.sensor, innovation, h.jacobian, noise, gate_imu_));
   return result;
 }
 
@@ -177,26 +180,33 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
   ProjectStates();  // k_s above the new torque before linearizing k / (k - T)
-  const LinearizedMeasurement h =
-      WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s);
-  const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(last_speed_radps_.data(), static_cast<Eigen::Index>(n));
+  UpdateBuffers& b = update_buffers_;
+  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s, b.model);
+  const auto m = static_cast<Eigen::Index>(n);
+  const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
   const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
-  const Eigen::VectorXd variance = (s * s + (f * z.array()).square()).matrix();
-  const Eigen::MatrixXd noise = variance.asDiagonal();
+  b.noise.setZero(m, m);
+  b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
+  b.innovation = z - b.model.predicted;
   const double gate = wheel_gates_[n - 1];
-  result.updates.push_back(Update(wheels.time_s, "wheels", z - h.predicted, h.jacobian, noise, gate));
+  result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.model.jacobian, b.noise, gate));
   // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
-  const LinearizedMeasurement lateral = WheelLateralVelocityModel(x_, vehicle_, layout_);
+  WheelLateralVelocityModel(x_, vehicle_, layout_, b.model);
   const double l = config_.wheels.lateral_velocity_sigma_mps;
-  const Eigen::MatrixXd lateral_noise = Eigen::MatrixXd::Identity(lateral.predicted.size(), lateral.predicted.size()) * l * l;
-  result.updates.push_back(Update(wheels.time_s, "nonholonomic", -lateral.predicted, lateral.jacobian, lateral_noise, gate));
+  b.noise.setZero(m, m);
+  b.noise.diagonal().setConstant(l * l);
+  b.innovation = -b.model.predicted;
+  result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.model.jacobian, b.noise, gate));
   return result;
 }
 
 ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   last_steering_rad_.assign(vehicle_.wheels.size(), std::nullopt);
-  std::vector<std::size_t> wheels;
-  std::vector<double> angles;
+  UpdateBuffers& b = update_buffers_;
+  std::vector<std::size_t>& wheels = b.wheels;
+  std::vector<double>& angles = b.angles;
+  wheels.clear();
+  angles.clear();
   for (std::size_t j = 0; j < steering.angle_rad.size(); ++j) {
     const std::size_t i = wheel_index_[j];
     last_steering_rad_[i] = steering.angle_rad[j];
@@ -207,26 +217,29 @@ ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   }
   ProcessResult result;
   if (!initialised_ || wheels.empty()) return result;
-  const LinearizedMeasurement h = SteeringModel(x_, layout_, wheels);
-  const Eigen::VectorXd z = Eigen::Map<const Eigen::VectorXd>(angles.data(), static_cast<Eigen::Index>(angles.size()));
-  const double s = config_.steering.angle_sigma_rad;
+  SteeringModel(x_, layout_, wheels, b.model);
   const auto m = static_cast<Eigen::Index>(wheels.size());
-  const Eigen::MatrixXd noise = Eigen::MatrixXd::Identity(m, m) * s * s;
+  const Eigen::Map<const Eigen::VectorXd> z(angles.data(), m);
+  const double s = config_.steering.angle_sigma_rad;
+  b.noise.setZero(m, m);
+  b.noise.diagonal().setConstant(s * s);
   const double gate = steering_gates_[static_cast<std::size_t>(m) - 1];
   // Swerve modules turn through +-pi: the innovation is an angle difference.
-  const Eigen::VectorXd innovation = (z - h.predicted).unaryExpr([](double d) { return WrapAngle(d); });
-  result.updates.push_back(Update(steering.time_s, "steering", innovation, h.jacobian, noise, gate));
+  b.innovation = (z - b.model.predicted).unaryExpr([](double d) { return WrapAngle(d); });
+  result.updates.push_back(Update(steering.time_s, "steering", b.innovation, b.model.jacobian, b.noise, gate));
   return result;
 }
 
 ProcessResult VehicleEkf::Apply(const VioMessage& vio) {
   ProcessResult result;
   if (!initialised_) return result;
-  const LinearizedMeasurement h = VioModel(x_, config_.vio.position_m);
+  LinearizedMeasurement& h = update_buffers_.model;
+  VioModel(x_, config_.vio.position_m, h);
   const double s = config_.vio.sigma_scale * vio.sigma_mps;
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * s * s;
   const Eigen::Vector2d z(vio.velocity_x_mps, vio.velocity_y_mps);
-  result.updates.push_back(Update(vio.time_s, vio.sensor, z - h.predicted, h.jacobian, noise, gate_vio_));
+  const Eigen::Vector2d innovation = z - h.predicted;
+  result.updates.push_back(Update(vio.time_s, vio.sensor, innovation, h.jacobian, noise, gate_vio_));
   return result;
 }
 

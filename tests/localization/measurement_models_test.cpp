@@ -139,6 +139,43 @@ TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
   }
 }
 
+// The out-parameter forms give the value forms' numbers bit for bit, whatever `out` held before
+// (one buffer reused across models of different sizes, entries left from a previous model).
+TEST(MeasurementModels, OutParameterFormsOverwriteAReusedBuffer) {
+  std::mt19937 rng(5);
+  const auto same = [](const LinearizedMeasurement& a, const LinearizedMeasurement& b) {
+    return a.predicted.size() == b.predicted.size() && a.jacobian.rows() == b.jacobian.rows() &&
+           a.jacobian.cols() == b.jacobian.cols() && (a.predicted.array() == b.predicted.array()).all() &&
+           (a.jacobian.array() == b.jacobian.array()).all();
+  };
+  for (const mapio::VehicleConfig& v : ShippedVehicles()) {
+    const StateLayout layout = StateLayout::For(v, true, true);
+    const Eigen::VectorXd x = RandomState(layout, rng);
+    const std::optional<std::vector<double>> torque = std::vector<double>(v.wheels.size(), 30.0);
+    std::vector<std::size_t> steered;
+    for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+      if (layout.steering[i] >= 0) steered.push_back(i);
+    }
+    LinearizedMeasurement out;
+    out.predicted = Eigen::VectorXd::Constant(7, 9.0);  // stale content of another size
+    out.jacobian = Eigen::MatrixXd::Constant(7, x.size(), 9.0);
+    WheelSpeedModel(x, v, layout, torque, 0.02, out);
+    EXPECT_TRUE(same(out, WheelSpeedModel(x, v, layout, torque, 0.02))) << v.name;
+    WheelLateralVelocityModel(x, v, layout, out);
+    EXPECT_TRUE(same(out, WheelLateralVelocityModel(x, v, layout))) << v.name;
+    GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2), out);
+    EXPECT_TRUE(same(out, GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2)))) << v.name;
+    ImuModel(x, Eigen::Vector2d(0.1, 0.05), layout.accel_bias, out);
+    EXPECT_TRUE(same(out, ImuModel(x, Eigen::Vector2d(0.1, 0.05), layout.accel_bias))) << v.name;
+    VioModel(x, Eigen::Vector2d(0.4, 0.0), out);
+    EXPECT_TRUE(same(out, VioModel(x, Eigen::Vector2d(0.4, 0.0)))) << v.name;
+    if (!steered.empty()) {
+      SteeringModel(x, layout, steered, out);
+      EXPECT_TRUE(same(out, SteeringModel(x, layout, steered))) << v.name;
+    }
+  }
+}
+
 TEST(WheelSpeedModel, AnEncoderWithALowPassReportsTheSpeedTauEarlier) {
   // Straight braking at 1 m/s^2 through 0.5 m/s: an encoder with a 0.02 s low-pass reads the speed
   // of 0.02 s before, 0.52 m/s; at constant speed the lag changes nothing.

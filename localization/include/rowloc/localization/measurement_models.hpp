@@ -42,10 +42,17 @@ struct LinearizedMeasurement {
   Eigen::MatrixXd jacobian;   ///< dh/dx, rows = measurement dimension, cols = state size
 };
 
+// Every model comes in two forms: one returns the linearization, the other writes it into `out`,
+// resizing it only when the sizes change, so that a filter reusing `out` allocates nothing per
+// message (VehicleEkf does). On an exception `out` is unspecified.
+
 LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, LinearizedMeasurement& out);
 
 /// accel_bias_index: StateLayout::accel_bias (b_ax, b_ay added to the specific force), or -1.
 LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int accel_bias_index = -1);
+void ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int accel_bias_index,
+              LinearizedMeasurement& out);
 
 /// Longitudinal wheel-centre velocity v_i (m/s) of wheel `index` (see the header comment).
 double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
@@ -57,20 +64,30 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
 
 /// All wheels in vehicle order (rad/s). torque_nm: one per wheel, used by the slip-aware model
 /// only (absent: T = 0, the odometer model reduces to v / R). encoder_lag_s: the encoders'
-/// low-pass time constant tau (>= 0; 0: none).
+/// low-pass time constant tau (>= 0; 0: none). Throws std::invalid_argument for a torque count
+/// other than the wheel count or a negative or non-finite lag.
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
                                       const std::optional<std::vector<double>>& torque_nm,
                                       double encoder_lag_s = 0.0);
+void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
+                     const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s,
+                     LinearizedMeasurement& out);
 
 /// Lateral wheel-centre velocities of all wheels (vehicle order), m/s (the non-holonomic rows).
 LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                                 const StateLayout& layout);
+void WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
+                               const StateLayout& layout, LinearizedMeasurement& out);
 
-/// Steering angles of the given wheels (indices into the vehicle's wheels; each must be steerable).
+/// Steering angles of the given wheels (indices into the vehicle's wheels; each must be steerable,
+/// else std::invalid_argument).
 LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,
                                     const std::vector<std::size_t>& wheels);
+void SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout, const std::vector<std::size_t>& wheels,
+                   LinearizedMeasurement& out);
 
 LinearizedMeasurement VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
+void VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, LinearizedMeasurement& out);
 
 }  // namespace rowloc::localization

@@ -27,6 +27,7 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
+#include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/sensor_messages.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/mapio/local_frame.hpp"
@@ -163,6 +164,16 @@ class VehicleEkf {
   std::vector<std::optional<double>> last_steering_rad_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
   RowMapRanging::Buffers candidate_buffers_;      ///< reused by every echo (no state: scratch)
+  /// Reused by every update (no state: scratch), so that a message allocates nothing for its
+  /// linearization, innovation and noise once their sizes repeat.
+  struct UpdateBuffers {
+    LinearizedMeasurement model;
+    Eigen::VectorXd innovation;
+    Eigen::MatrixXd noise;
+    std::vector<std::size_t> wheels;  ///< steering: the vehicle wheels with an angle
+    std::vector<double> angles;       ///< steering: their angles
+  };
+  UpdateBuffers update_buffers_;
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
