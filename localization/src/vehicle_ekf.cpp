@@ -129,7 +129,7 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
     return result;
   }
   const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
-  LinearizedMeasurement& h = update_buffers_.model;
+  LinearizedMeasurement& h = update_buffers_.gnss;
   GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), h);
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
@@ -157,7 +157,7 @@ ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
   // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
   const Eigen::Vector2d force = Rotation(vehicle_.imu.yaw_rad) * Eigen::Vector2d(imu.accel_x_mps2, imu.accel_y_mps2);
   const Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
-  LinearizedMeasurement& h = update_buffers_.model;
+  LinearizedMeasurement& h = update_buffers_.imu;
   ImuModel(x_, vehicle_.imu.position_m.head<2>(), layout_.accel_bias, h);
   const double a = config_.imu.accel_sigma_mps2 * config_.imu.accel_sigma_mps2;
   const double g = config_.imu.gyro_sigma_radps * config_.imu.gyro_sigma_radps;
@@ -181,30 +181,30 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   if (wheels.torque_nm) torque = last_torque_nm_;
   ProjectStates();  // k_s above the new torque before linearizing k / (k - T)
   UpdateBuffers& b = update_buffers_;
-  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s, b.model);
+  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s, b.wheels);
   const auto m = static_cast<Eigen::Index>(n);
   const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
   const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
   b.noise.setZero(m, m);
   b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
-  b.innovation = z - b.model.predicted;
+  b.innovation = z - b.wheels.predicted;
   const double gate = wheel_gates_[n - 1];
-  result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.model.jacobian, b.noise, gate));
+  result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.wheels.jacobian, b.noise, gate));
   // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
-  WheelLateralVelocityModel(x_, vehicle_, layout_, b.model);
+  WheelLateralVelocityModel(x_, vehicle_, layout_, b.wheels);
   const double l = config_.wheels.lateral_velocity_sigma_mps;
   b.noise.setZero(m, m);
   b.noise.diagonal().setConstant(l * l);
-  b.innovation = -b.model.predicted;
-  result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.model.jacobian, b.noise, gate));
+  b.innovation = -b.wheels.predicted;
+  result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.wheels.jacobian, b.noise, gate));
   return result;
 }
 
 ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   last_steering_rad_.assign(vehicle_.wheels.size(), std::nullopt);
   UpdateBuffers& b = update_buffers_;
-  std::vector<std::size_t>& wheels = b.wheels;
-  std::vector<double>& angles = b.angles;
+  std::vector<std::size_t>& wheels = b.steered_wheels;
+  std::vector<double>& angles = b.steered_angles;
   wheels.clear();
   angles.clear();
   for (std::size_t j = 0; j < steering.angle_rad.size(); ++j) {
@@ -217,7 +217,7 @@ ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   }
   ProcessResult result;
   if (!initialised_ || wheels.empty()) return result;
-  SteeringModel(x_, layout_, wheels, b.model);
+  SteeringModel(x_, layout_, wheels, b.steering);
   const auto m = static_cast<Eigen::Index>(wheels.size());
   const Eigen::Map<const Eigen::VectorXd> z(angles.data(), m);
   const double s = config_.steering.angle_sigma_rad;
@@ -225,15 +225,15 @@ ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   b.noise.diagonal().setConstant(s * s);
   const double gate = steering_gates_[static_cast<std::size_t>(m) - 1];
   // Swerve modules turn through +-pi: the innovation is an angle difference.
-  b.innovation = (z - b.model.predicted).unaryExpr([](double d) { return WrapAngle(d); });
-  result.updates.push_back(Update(steering.time_s, "steering", b.innovation, b.model.jacobian, b.noise, gate));
+  b.innovation = (z - b.steering.predicted).unaryExpr([](double d) { return WrapAngle(d); });
+  result.updates.push_back(Update(steering.time_s, "steering", b.innovation, b.steering.jacobian, b.noise, gate));
   return result;
 }
 
 ProcessResult VehicleEkf::Apply(const VioMessage& vio) {
   ProcessResult result;
   if (!initialised_) return result;
-  LinearizedMeasurement& h = update_buffers_.model;
+  LinearizedMeasurement& h = update_buffers_.vio;
   VioModel(x_, config_.vio.position_m, h);
   const double s = config_.vio.sigma_scale * vio.sigma_mps;
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * s * s;

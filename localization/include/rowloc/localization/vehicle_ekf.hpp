@@ -165,13 +165,14 @@ class VehicleEkf {
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
   RowMapRanging::Buffers candidate_buffers_;      ///< reused by every echo (no state: scratch)
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
-  /// linearization, innovation and noise once their sizes repeat.
+  /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
+  /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
-    LinearizedMeasurement model;
+    LinearizedMeasurement gnss, imu, wheels, steering, vio;
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;
-    std::vector<std::size_t> wheels;  ///< steering: the vehicle wheels with an angle
-    std::vector<double> angles;       ///< steering: their angles
+    std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
+    std::vector<double> steered_angles;       ///< their angles
   };
   UpdateBuffers update_buffers_;
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
