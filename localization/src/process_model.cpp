@@ -127,8 +127,8 @@ void CoupledColumns(const BaseJacobian& f, const double* __restrict__ p, Eigen::
 /// P <- F P F^T for F = diag(f, I) with f of the pattern kCoupledRows, from the columns c_k of
 /// P F^T (CoupledColumns): since P is symmetric, row and column k of F P F^T are c_k outside the
 /// coupled block, and the block is B(a, b) = sum_j f(a, j) c_b(j), whose upper triangle (a <= b)
-/// is written to both triangles (P stays exactly symmetric). O(nnz(f) n) on contiguous columns instead of
-/// O(9^2 n). Columns: an n x kCoupled matrix type.
+/// is written to both triangles (P stays exactly symmetric). O(nnz(f) n) on contiguous columns
+/// instead of O(9^2 n). Columns: an n x kCoupled matrix type.
 template <typename Columns>
 void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
@@ -142,8 +142,8 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Matrix<double, kCoupled, kCoupled> block = f.topRows<kCoupled>().lazyProduct(c_base);
   // The coupled states' columns are c (the leading kCoupled columns of the column-major P: one
   // contiguous block) and their rows, by symmetry, c^T, written column by column (kCoupled
-  // contiguous entries each; plain loops: Eigen's block assignments cost about three times as
-  // much at these sizes, docs/benchmarks.md). The block then overwrites the leading corner.
+  // contiguous entries each; plain loops take fewer instructions than Eigen's block assignments
+  // at these sizes). The block then overwrites the leading corner.
   double* const target = p.data();
   const double* const source = c.data();
   std::copy(source, source + kCoupled * n, target);
