@@ -294,6 +294,30 @@ TEST(KalmanUpdate, RejectsNonFiniteInputs) {
   }
 }
 
+// H viewed in a larger buffer (outer stride 3 for 2 rows): a bad entry of H is found, one in the
+// padding row (not part of H) is not.
+TEST(KalmanUpdate, NonFiniteCheckFollowsTheJacobiansStrides) {
+  std::mt19937_64 rng(4);
+  const Problem pr = RandomProblem(5, 2, rng);
+  using StridedMap = Eigen::Map<const Eigen::MatrixXd, Eigen::Aligned16, Eigen::OuterStride<>>;
+  Eigen::MatrixXd buffer = Eigen::MatrixXd::Zero(3, 5);
+  buffer.topRows(2) = pr.h;
+  for (const double bad : {kNaN, kInf}) {
+    buffer(2, 4) = bad;  // padding
+    Eigen::VectorXd x = pr.x;
+    Eigen::MatrixXd p = pr.p;
+    EXPECT_TRUE(KalmanUpdate(x, p, pr.y, StridedMap(buffer.data(), 2, 5, Eigen::OuterStride<>(3)), pr.r, kInf, -1)
+                    .accepted);
+    buffer(2, 4) = 0.0;
+    buffer(1, 4) = bad;  // in H
+    x = pr.x;
+    p = pr.p;
+    EXPECT_THROW(KalmanUpdate(x, p, pr.y, StridedMap(buffer.data(), 2, 5, Eigen::OuterStride<>(3)), pr.r, kInf, -1),
+                 std::invalid_argument);
+    buffer(1, 4) = pr.h(1, 4);
+  }
+}
+
 TEST(KalmanUpdate, IndefiniteInnovationCovarianceIsNeverApplied) {
   Eigen::VectorXd x = Eigen::VectorXd::Ones(3);
   Eigen::MatrixXd p = Eigen::MatrixXd::Identity(3, 3);
