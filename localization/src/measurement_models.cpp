@@ -9,7 +9,7 @@ using L = StateLayout;
 
 namespace {
 
-/// out = zeros of rows x cols (h) and rows (H); resizes only on a size change.
+/// out: h = rows zeros, H = rows x cols zeros; resizes only on a size change.
 void SetZero(LinearizedMeasurement& out, Eigen::Index rows, Eigen::Index cols) {
   out.predicted.setZero(rows);
   out.jacobian.setZero(rows, cols);
