@@ -197,40 +197,37 @@ void Axpy(double a, const double* __restrict__ x, double* __restrict__ y, Eigen:
 }
 
 /// The vectors of one scalar correction from u = P h^T and s = h u + r > 0: the gain k = u / s (one
-/// division, not n: any gain is fine for the Joseph form), w = u - k s and g = sqrt(s) k.
+/// division, not n: any gain is fine for the Joseph form) and v = u - (s / 2) k.
 void ScalarGain(const double* __restrict__ u, double s, Eigen::Index n, double* __restrict__ k,
-                double* __restrict__ w, double* __restrict__ g) {
-  const double inverse = 1.0 / s, root = std::sqrt(s);
+                double* __restrict__ v) {
+  const double inverse = 1.0 / s, half = 0.5 * s;
   for (Eigen::Index r = 0; r < n; ++r) {
     k[r] = u[r] * inverse;
-    w[r] = u[r] - s * k[r];
-    g[r] = root * k[r];
+    v[r] = u[r] - half * k[r];
   }
 }
 
-/// p -= sum over the Count correction columns e of g_e g_e^T + (k_e w_e^T + w_e k_e^T), entry (r, c)
-/// summed in a register in the order of e; g, k, w hold Count columns of length n (leading dimension
-/// n). Entry (c, r) takes the same products and addends in commuted order, and IEEE products and
-/// sums commute: a symmetric P stays exactly symmetric without a mirroring pass (its strided stores
-/// cost as much as the update). That needs every product rounded on its own: no FMA contraction
+/// p -= sum over the Count correction columns e of k_e v_e^T + v_e k_e^T, entry (r, c) summed in a
+/// register in the order of e; k and v hold Count columns of length n (leading dimension n). Entry
+/// (c, r) takes the same products and addends in commuted order, and IEEE products and sums commute:
+/// a symmetric P stays exactly symmetric without a mirroring pass (its strided stores would cost as
+/// much as the update). That needs every product rounded on its own: no FMA contraction
 /// (cmake/RowlocOptions.cmake). Count is a compile-time constant, so the sum unrolls and the loop
 /// over the contiguous rows vectorizes. Each Count is its own cloned function: its restrict
 /// parameters spare the loop the run-time aliasing checks an inlined copy would get.
 template <int Count>
-ROWLOC_VECTOR_CLONES void SubtractSymmetricCorrectionsOf(double* __restrict__ p, const double* __restrict__ g,
-                                           const double* __restrict__ k, const double* __restrict__ w,
-                                           Eigen::Index n) {
+ROWLOC_VECTOR_CLONES void SubtractSymmetricCorrectionsOf(double* __restrict__ p, const double* __restrict__ k,
+                                                         const double* __restrict__ v, Eigen::Index n) {
   for (Eigen::Index c = 0; c < n; ++c) {
-    double gc[Count], kc[Count], wc[Count];
+    double kc[Count], vc[Count];
     for (int e = 0; e < Count; ++e) {
-      gc[e] = g[e * n + c];
       kc[e] = k[e * n + c];
-      wc[e] = w[e * n + c];
+      vc[e] = v[e * n + c];
     }
     double* __restrict__ column = p + c * n;
     for (Eigen::Index r = 0; r < n; ++r) {
-      double sum = g[r] * gc[0] + (k[r] * wc[0] + w[r] * kc[0]);
-      for (int e = 1; e < Count; ++e) sum += g[e * n + r] * gc[e] + (k[e * n + r] * wc[e] + w[e * n + r] * kc[e]);
+      double sum = k[r] * vc[0] + v[r] * kc[0];
+      for (int e = 1; e < Count; ++e) sum += k[e * n + r] * vc[e] + v[e * n + r] * kc[e];
       column[r] -= sum;
     }
   }
@@ -238,21 +235,19 @@ ROWLOC_VECTOR_CLONES void SubtractSymmetricCorrectionsOf(double* __restrict__ p,
 
 /// SubtractSymmetricCorrectionsOf for any count >= 1: one pass over P per kMaxCombinedColumns
 /// corrections (each pass keeps P exactly symmetric).
-void SubtractSymmetricCorrections(double* p, const double* g, const double* k, const double* w, Eigen::Index n,
-                                  Eigen::Index count) {
+void SubtractSymmetricCorrections(double* p, const double* k, const double* v, Eigen::Index n, Eigen::Index count) {
   for (Eigen::Index first = 0; first < count; first += detail::kMaxCombinedColumns) {
-    const double* gs = g + first * n;
     const double* ks = k + first * n;
-    const double* ws = w + first * n;
+    const double* vs = v + first * n;
     switch (std::min<Eigen::Index>(count - first, detail::kMaxCombinedColumns)) {
-      case 1: SubtractSymmetricCorrectionsOf<1>(p, gs, ks, ws, n); break;
-      case 2: SubtractSymmetricCorrectionsOf<2>(p, gs, ks, ws, n); break;
-      case 3: SubtractSymmetricCorrectionsOf<3>(p, gs, ks, ws, n); break;
-      case 4: SubtractSymmetricCorrectionsOf<4>(p, gs, ks, ws, n); break;
-      case 5: SubtractSymmetricCorrectionsOf<5>(p, gs, ks, ws, n); break;
-      case 6: SubtractSymmetricCorrectionsOf<6>(p, gs, ks, ws, n); break;
-      case 7: SubtractSymmetricCorrectionsOf<7>(p, gs, ks, ws, n); break;
-      default: SubtractSymmetricCorrectionsOf<detail::kMaxCombinedColumns>(p, gs, ks, ws, n); break;
+      case 1: SubtractSymmetricCorrectionsOf<1>(p, ks, vs, n); break;
+      case 2: SubtractSymmetricCorrectionsOf<2>(p, ks, vs, n); break;
+      case 3: SubtractSymmetricCorrectionsOf<3>(p, ks, vs, n); break;
+      case 4: SubtractSymmetricCorrectionsOf<4>(p, ks, vs, n); break;
+      case 5: SubtractSymmetricCorrectionsOf<5>(p, ks, vs, n); break;
+      case 6: SubtractSymmetricCorrectionsOf<6>(p, ks, vs, n); break;
+      case 7: SubtractSymmetricCorrectionsOf<7>(p, ks, vs, n); break;
+      default: SubtractSymmetricCorrectionsOf<detail::kMaxCombinedColumns>(p, ks, vs, n); break;
     }
   }
 }
@@ -266,16 +261,16 @@ Vector SparseColumn(const Eigen::MatrixXd& covariance, const MatrixRef& jacobian
 }
 
 /// One scalar correction with u = P h^T and s = h u + r > 0: k = u / s, x <- x + k y and the Joseph
-/// form P - k u^T - w k^T with w = u - k s (zero up to round-off), which is the symmetric
-/// P - s k k^T - (k w^T + w k^T) = P - g g^T - (k w^T + w k^T) with g = sqrt(s) k. P must be
-/// symmetric (KalmanUpdate's precondition); it stays exactly symmetric (SubtractSymmetricCorrections).
+/// form (I - k h) P (I - k h)^T + k r k^T = P - k u^T - u k^T + s k k^T = P - k v^T - v k^T with
+/// v = u - (s / 2) k, for any k. P must be symmetric (KalmanUpdate's precondition); it stays exactly
+/// symmetric (SubtractSymmetricCorrections).
 template <typename Vector>
 void ApplyScalarCorrection(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, const Vector& u, double s, double y) {
   const Eigen::Index n = state.size();
-  Vector gain(n), w(n), root(n);
-  ScalarGain(u.data(), s, n, gain.data(), w.data(), root.data());
+  Vector gain(n), v(n);
+  ScalarGain(u.data(), s, n, gain.data(), v.data());
   Axpy(y, gain.data(), state.data(), n);
-  SubtractSymmetricCorrections(covariance.data(), root.data(), gain.data(), w.data(), n, 1);
+  SubtractSymmetricCorrections(covariance.data(), gain.data(), v.data(), n, 1);
 }
 
 /// The update of one scalar measurement (m = 1): S, the NIS and the gain are scalars, so there is
@@ -305,12 +300,11 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
 /// linearization point (sequential Kalman filtering: Simon, Optimal State Estimation, 2006, §6.1),
 /// equal to the joint update for a linearized measurement with independent components. Correction i
 /// has u_i = P_(i-1) h_i^T, s_i = h_i u_i + R_ii, k_i = u_i / s_i and the innovation
-/// y_i - h_i (x_(i-1) - x_0); its Joseph form is P_i = P_(i-1) - g_i g_i^T - (k_i w_i^T + w_i k_i^T)
-/// with g_i = sqrt(s_i) k_i and w_i = u_i - k_i s_i (zero up to round-off).
-/// All corrections are computed before P changes: with U = P H^T (sparse H),
-///   u_i = U_i - sum_(j<i) g_j (g_j . h_i)
-/// (the w_j terms of P_(i-1) are round-off, |w_j| ~ eps |u_j|, below the rounding of this sum), and
-/// then applied to P in one pass (SubtractSymmetricCorrections). The s_i are the pivots of the LDL^T
+/// y_i - h_i (x_(i-1) - x_0); its Joseph form is P_i = P_(i-1) - k_i v_i^T - v_i k_i^T with
+/// v_i = u_i - (s_i / 2) k_i (ApplyScalarCorrection). All corrections are computed before P changes:
+/// with U = P H^T (sparse H), P_(i-1) = P - sum_(j<i) (k_j v_j^T + v_j k_j^T) gives exactly
+///   u_i = U_i - sum_(j<i) (k_j (v_j . h_i) + v_j (k_j . h_i)),
+/// and then they are applied to P in one pass (SubtractSymmetricCorrections). The s_i are the pivots of the LDL^T
 /// factorization of S = H P H^T + R, so S is positive definite iff every s_i > 0, and the joint
 /// NIS y^T S^-1 y is sum_i y_i'^2 / s_i (the chain rule of the Gaussian likelihood): the gate needs
 /// no factorization, and a gated update leaves x and P untouched. Tall: n x m; Square: m x m;
@@ -330,12 +324,17 @@ UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& cova
     for (Eigen::Index i = 0; i <= j; ++i) s(i, j) = s(j, i) = h.Dot(i, u.col(j).data()) + noise(i, j);
   }
   outcome.innovation_covariance = s;
-  Tall root(n, m), gain(n, m), residual(n, m);  // g_i, k_i, w_i
-  Vector shift = Vector::Zero(n);               // x_(i-1) - x_0
+  Tall gain(n, m), half(n, m);     // k_i, v_i
+  Vector shift = Vector::Zero(n);  // x_(i-1) - x_0
   double nis = 0.0;
   for (Eigen::Index i = 0; i < m; ++i) {
     double* u_i = u.col(i).data();
-    for (Eigen::Index j = 0; j < i; ++j) Axpy(-h.Dot(i, root.col(j).data()), root.col(j).data(), u_i, n);
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double* k_j = gain.col(j).data();
+      const double* v_j = half.col(j).data();
+      Axpy(-h.Dot(i, v_j), k_j, u_i, n);
+      Axpy(-h.Dot(i, k_j), v_j, u_i, n);
+    }
     const double s_i = h.Dot(i, u_i) + noise(i, i);
     if (!(s_i > 0.0)) {
       outcome.nis = std::numeric_limits<double>::infinity();
@@ -343,14 +342,14 @@ UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& cova
     }
     const double y_i = innovation(i) - h.Dot(i, shift.data());
     nis += y_i * (y_i / s_i);
-    ScalarGain(u_i, s_i, n, gain.col(i).data(), residual.col(i).data(), root.col(i).data());
+    ScalarGain(u_i, s_i, n, gain.col(i).data(), half.col(i).data());
     Axpy(y_i, gain.col(i).data(), shift.data(), n);
   }
   outcome.nis = nis;
   if (!(nis <= gate_threshold)) return outcome;
   state += shift;
   if (angle_index >= 0) state(angle_index) = WrapAngle(state(angle_index));
-  SubtractSymmetricCorrections(covariance.data(), root.data(), gain.data(), residual.data(), n, m);
+  SubtractSymmetricCorrections(covariance.data(), gain.data(), half.data(), n, m);
   outcome.accepted = true;
   return outcome;
 }

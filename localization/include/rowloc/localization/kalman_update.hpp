@@ -15,8 +15,8 @@
 // factorization; m > 1 components with a diagonal R are m scalar corrections at the same
 // linearization point (sequential Kalman filtering, Simon, Optimal State Estimation, 2006, §6.1),
 // correction i with
-//   u = P_(i-1) h_i^T, s = h_i u + R_ii, k = u / s,   P_i = P_(i-1) - g g^T - (k w^T + w k^T),
-// w = u - k s, g = sqrt(s) k (s k k^T = g g^T): the same Joseph identity for m = 1. The s_i are
+//   u = P_(i-1) h_i^T, s = h_i u + R_ii, k = u / s,   P_i = P_(i-1) - k v^T - v k^T,
+// v = u - (s / 2) k: the same Joseph identity for m = 1 (P - k u^T - u k^T + s k k^T). The s_i are
 // the pivots of the LDL^T factorization of S, so the joint NIS is sum_i y_i'^2 / s_i (y_i' the
 // innovation left after the first i - 1 corrections) and the gate needs no factorization; all
 // corrections are computed from U = P H^T before P changes and then applied in one pass over P.
