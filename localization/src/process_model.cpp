@@ -134,12 +134,6 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   const Eigen::Index n = p.rows();
   Columns c(n, kCoupled);
   CoupledColumns(f, p.data(), n, c.data());
-  // The block F_(coupled, :) C_(base, :): the coupled rows of f only reach the base states, the
-  // first kBase rows of c (a fixed-size product; f's zeros add exact zeros).
-  constexpr int kBase = BaseJacobian::ColsAtCompileTime;
-  const Eigen::Map<const Eigen::Matrix<double, kBase, kCoupled>, 0, Eigen::OuterStride<>> c_base(
-      c.data(), Eigen::OuterStride<>(n));  // n >= kBase: every layout starts with the base states
-  const Eigen::Matrix<double, kCoupled, kCoupled> block = f.topRows<kCoupled>().lazyProduct(c_base);
   // The coupled states' columns are c (the leading kCoupled columns of the column-major P: one
   // contiguous block) and their rows, by symmetry, c^T, written column by column (kCoupled
   // contiguous entries each; plain loops take fewer instructions than Eigen's block assignments
@@ -150,8 +144,23 @@ void CongruenceWith(const BaseJacobian& f, Eigen::MatrixXd& p) {
   for (Eigen::Index col = kCoupled; col < n; ++col) {
     for (Eigen::Index k = 0; k < kCoupled; ++k) target[col * n + k] = source[k * n + col];
   }
+  // The block B = F_(coupled, :) C: row a of f reaches only the columns of its pattern (base states,
+  // the leading rows of each c_b), so B(a, b) sums row.count products, 63 on the upper triangle
+  // instead of a dense 5 x 9 by 9 x 5 product's 225. Written to both triangles.
+#pragma GCC unroll 5
   for (int b = 0; b < kCoupled; ++b) {
-    for (int a = 0; a <= b; ++a) p(a, b) = p(b, a) = block(a, b);  // the upper triangle, mirrored
+    const double* const c_b = source + b * n;
+#pragma GCC unroll 5
+    for (int a = 0; a <= b; ++a) {
+      const CoupledRow& row = kCoupledRows[static_cast<std::size_t>(a)];
+      double sum = 0.0;
+#pragma GCC unroll 5
+      for (int e = 0; e < row.count; ++e) {
+        const int j = row.columns[static_cast<std::size_t>(e)];
+        sum += f(a, j) * c_b[j];
+      }
+      p(a, b) = p(b, a) = sum;
+    }
   }
 }
 
