@@ -217,6 +217,9 @@ void RunReplay(const ReplayOptions& o) {
                  "{} contradicting, {} uninformative, {} degenerate",
                  localization::MapAidedMethodName(config.map_aided.method), s.echoes, s.no_segment, s.ambiguous,
                  s.contradicting, s.uninformative, s.degenerate);
+    const geometry::SegmentQueryCache& cache = ekf.row_search_cache();
+    spdlog::info("row search: {} of {} R-tree box queries answered from the cache ({} m margin)", cache.hits(),
+                 cache.hits() + cache.misses(), cache.margin_m());
   }
   if (skipped > 0) spdlog::info("{} messages skipped (--skip {})", skipped, fmt::join(o.skip_types, ","));
   for (const auto& [sensor, c] : counts) {

@@ -50,6 +50,10 @@ using CastTree = bgi::rtree<CastValue, bgi::rstar<8>>;
 
 BoostPoint ToBoost(const Eigen::Vector2d& p) { return BoostPoint(p.x(), p.y()); }
 
+Eigen::Vector2d FromBoost(const BoostPoint& p) { return {p.get<0>(), p.get<1>()}; }
+
+SegmentQueryCache::Box FromBoost(const BoostBox& box) { return {FromBoost(box.min_corner()), FromBoost(box.max_corner())}; }
+
 Segment2 ToSegment(const BoostSegment& s) {
   return Segment2{{bg::get<0, 0>(s), bg::get<0, 1>(s)}, {bg::get<1, 0>(s), bg::get<1, 1>(s)}};
 }
@@ -156,6 +160,12 @@ std::vector<Value> TreeValues(const std::vector<SegmentIndex::Entry>& entries, M
 }  // namespace
 
 struct SegmentIndex::Impl {
+  // A query's cache, if any, and the index's handle for it.
+  struct CacheUse {
+    SegmentQueryCache* cache = nullptr;
+    const std::shared_ptr<const void>* owner = nullptr;
+  };
+
   std::vector<Entry> entries;
   NearestTree nearest_tree;
   CastTree cast_tree;
@@ -189,11 +199,33 @@ struct SegmentIndex::Impl {
     return far.stableNorm();
   }
 
-  // Calls visit(segment, entry index) for every segment whose bounding box meets box.
+  // Calls visit(segment, entry index) for every segment whose bounding box meets box, in the
+  // tree's order.
   template <class Visit>
   void VisitCandidates(const BoostBox& box, Visit&& visit) const {
     const auto each = [&](const CastValue& v) { visit(ToSegment(v), v.second.entry); };
     cast_tree.query(bgi::intersects(box), boost::make_function_output_iterator(each));
+  }
+
+  // The same, answered from the caller's cache when a stored box holds box (the same segments in
+  // the same order: segment_query_cache.hpp); otherwise the tree's result for the grown box is
+  // stored first. owner: the index's handle that the cache checks (SegmentIndex::impl_).
+  template <class Visit>
+  void VisitCandidates(const BoostBox& box, const CacheUse& use, Visit&& visit) const {
+    if (use.cache == nullptr) return VisitCandidates(box, visit);
+    const SegmentQueryCache::Box query = FromBoost(box);
+    const std::vector<SegmentQueryCache::Item>* items = use.cache->Find(query, *use.owner);
+    if (items == nullptr) {
+      SegmentQueryCache::Box grown;
+      std::vector<SegmentQueryCache::Item>& stored = use.cache->Store(query, grown);
+      const auto each = [&](const CastValue& v) { stored.push_back({FromBoost(v.first), ToSegment(v), v.second.entry}); };
+      cast_tree.query(bgi::intersects(BoostBox(ToBoost(grown.lo), ToBoost(grown.hi))),
+                      boost::make_function_output_iterator(each));
+      items = &stored;
+    }
+    for (const SegmentQueryCache::Item& item : *items) {
+      if (item.box.Meets(query)) visit(item.segment, item.entry);
+    }
   }
 
   // A segment near a piece of the sector, with its distance from the apex.
@@ -207,10 +239,10 @@ struct SegmentIndex::Impl {
   // and that may meet the sector, nearest to the apex first (replacing the content of out).
   template <class Out>
   void SortedPieceCandidates(const PreparedCone& sector, const SectorHalfPlanes& half_planes, double inner_m,
-                             double outer_m, Out& out) const {
+                             double outer_m, const CacheUse& use, Out& out) const {
     const Eigen::Vector2d& apex = sector.cone().apex;
     out.clear();
-    VisitCandidates(PieceBox(sector, inner_m, outer_m), [&](const Segment2& s, std::size_t entry) {
+    VisitCandidates(PieceBox(sector, inner_m, outer_m), use, [&](const Segment2& s, std::size_t entry) {
       if (half_planes.MayMeet(s)) out.push_back(PieceCandidate{s.Distance(apex), s, entry});
     });
     std::sort(out.begin(), out.end(),
@@ -222,7 +254,8 @@ struct SegmentIndex::Impl {
   // best hit so far; it stops once best + window_m <= r_k, or at the reach. visit(hit) sees every
   // hit cast (a segment that straddles two pieces twice). Returns the best (nearest) hit.
   template <class Cast, class Visit>
-  std::optional<Hit> GrowingSearch(const PreparedCone& sector, double window_m, Cast&& cast, Visit&& visit) const {
+  std::optional<Hit> GrowingSearch(const PreparedCone& sector, double window_m, const CacheUse& use, Cast&& cast,
+                                   Visit&& visit) const {
     if (entries.empty()) return std::nullopt;
     const double limit_m = std::min(sector.cone().max_range_m, CoverRadius(sector.cone().apex));
     const Eigen::Vector2d& apex = sector.cone().apex;
@@ -232,7 +265,7 @@ struct SegmentIndex::Impl {
     boost::container::small_vector<PieceCandidate, 16> candidates;
     for (double radius_m = initial_radius_m;; radius_m *= 2.0) {
       const double outer_m = std::min(radius_m, limit_m);
-      SortedPieceCandidates(sector, half_planes, inner_m, outer_m, candidates);
+      SortedPieceCandidates(sector, half_planes, inner_m, outer_m, use, candidates);
       for (const PieceCandidate& c : candidates) {
         if (c.distance_m > FarthestUsefulDistance(best ? best->hit.range_m + window_m : limit_m, apex)) break;
         if (const std::optional<RayHit> hit = cast(c.segment)) {
@@ -249,14 +282,15 @@ struct SegmentIndex::Impl {
   // Nearest hit of cast(segment) over all entries.
   template <class Cast>
   std::optional<Hit> NearestHit(const PreparedCone& sector, Cast&& cast) const {
-    return GrowingSearch(sector, 0.0, cast, [](const Hit&) {});
+    return GrowingSearch(sector, 0.0, CacheUse{}, cast, [](const Hit&) {});
   }
 
   // Every hit of cast(segment) with range <= (nearest range) + window_m, into hits (unsorted, no
   // entry twice).
   template <class Cast>
-  void HitsNearNearest(const PreparedCone& sector, double window_m, Cast&& cast, std::vector<Hit>& hits) const {
-    const std::optional<Hit> best = GrowingSearch(sector, window_m, cast, [&](const Hit& hit) {
+  void HitsNearNearest(const PreparedCone& sector, double window_m, const CacheUse& use, Cast&& cast,
+                       std::vector<Hit>& hits) const {
+    const std::optional<Hit> best = GrowingSearch(sector, window_m, use, cast, [&](const Hit& hit) {
       if (std::none_of(hits.begin(), hits.end(), [&](const Hit& h) { return h.entry == hit.entry; })) {
         hits.push_back(hit);
       }
@@ -269,7 +303,7 @@ struct SegmentIndex::Impl {
 };
 
 SegmentIndex::SegmentIndex(std::vector<Entry> entries)
-    : impl_(std::make_shared<const Impl>(std::move(entries))) {}
+    : impl_(std::make_shared<const Impl>(std::move(entries))), cache_owner_(impl_) {}
 
 SegmentIndex SegmentIndex::FromRowMap(const RowMap& map) {
   std::vector<Entry> entries;
@@ -328,12 +362,18 @@ std::vector<SegmentIndex::Hit> SegmentIndex::ConeCastNearest(const Cone2& cone, 
 }
 
 void SegmentIndex::ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits) const {
+  ConeCastNearest(cone, window_m, hits, nullptr);
+}
+
+void SegmentIndex::ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits,
+                                   SegmentQueryCache* cache) const {
   if (!(window_m >= 0.0)) {
     throw std::invalid_argument("SegmentIndex::ConeCastNearest: window_m must be >= 0 (not NaN)");
   }
   const PreparedCone sector(cone);
   hits.clear();
-  impl_->HitsNearNearest(sector, window_m, [&](const Segment2& s) { return sector.Cast(s); }, hits);
+  const Impl::CacheUse use{cache, &cache_owner_};
+  impl_->HitsNearNearest(sector, window_m, use, [&](const Segment2& s) { return sector.Cast(s); }, hits);
   std::sort(hits.begin(), hits.end(), HitOrder);
 }
 

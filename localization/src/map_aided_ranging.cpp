@@ -273,7 +273,7 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
   candidates.clear();
   // The nearest hit and every segment within the window behind it, in one search of the R-tree.
   const std::vector<geometry::SegmentIndex::Hit>& hits = buffers.hits;
-  index_.ConeCastNearest(cone, window_m, buffers.hits);
+  index_.ConeCastNearest(cone, window_m, buffers.hits, &buffers.query_cache);
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);
   // different rows are alternatives for the data association (a prediction error of a lane).

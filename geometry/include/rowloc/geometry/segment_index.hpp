@@ -18,7 +18,9 @@
 //   A best-first traversal (Boost's incremental nearest query) measured 1.3-2x slower: its
 //   type-erased iterator allocates and sorts at every node.
 // - ConeCastNearest: the nearest hit and every hit within a window behind it, by the same growing
-//   search, which then stops when the window ends inside the pieces searched.
+//   search, which then stops when the window ends inside the pieces searched. A caller that casts
+//   from nearby poses again and again (a filter's sensors) may pass a SegmentQueryCache: the piece
+//   queries inside a box it stored skip the tree, with the same result.
 // - ConeCastAll: every segment meeting the sector, with its nearest point, by range (at a polygon
 //   corner both segments are returned). No occlusion: segments behind others are returned too.
 //   One query with the bounding box of the whole sector (or of its piece beyond a minimum range),
@@ -32,6 +34,7 @@
 #include "rowloc/geometry/ray_cast.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/geometry/segment2.hpp"
+#include "rowloc/geometry/segment_query_cache.hpp"
 
 #include <Eigen/Core>
 
@@ -84,6 +87,10 @@ class SegmentIndex {
   std::vector<Hit> ConeCastNearest(const Cone2& cone, double window_m) const;
   /// The same into `hits` (cleared first): a caller that keeps the vector allocates nothing per query.
   void ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits) const;
+  /// The same with the caller's query cache (nullptr: none): the same result bit for bit, the box
+  /// queries of the search answered from `cache` when they fall inside a stored box
+  /// (segment_query_cache.hpp).
+  void ConeCastNearest(const Cone2& cone, double window_m, std::vector<Hit>& hits, SegmentQueryCache* cache) const;
 
   /// Every segment meeting the sector, by range (then entry); errors as ConeCast.
   std::vector<Hit> ConeCastAll(const Cone2& cone) const;
@@ -96,6 +103,7 @@ class SegmentIndex {
  private:
   struct Impl;
   std::shared_ptr<const Impl> impl_;
+  std::shared_ptr<const void> cache_owner_;  ///< impl_ as the owner handle of query caches
 };
 
 }  // namespace rowloc::geometry

@@ -107,6 +107,8 @@ class VehicleEkf {
   void AttachRowMap(const geometry::RowMap& map);
   bool has_row_map() const { return ranging_ != nullptr; }
   const MapAidedStats& map_aided_stats() const { return map_aided_stats_; }
+  /// The filter's cache of R-tree box queries of the row map (hits and misses since construction).
+  const geometry::SegmentQueryCache& row_search_cache() const { return candidate_buffers_.query_cache; }
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
 
@@ -163,7 +165,8 @@ class VehicleEkf {
   std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
   std::vector<std::optional<double>> last_steering_rad_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
-  RowMapRanging::Buffers candidate_buffers_;      ///< reused by every echo (no state: scratch)
+  /// Reused by every echo: scratch, and the cache of R-tree results, which changes no result.
+  RowMapRanging::Buffers candidate_buffers_;
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
