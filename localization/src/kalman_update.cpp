@@ -218,18 +218,29 @@ void ScalarGain(const double* __restrict__ u, double s, Eigen::Index n, double* 
 template <int Count>
 ROWLOC_VECTOR_CLONES void SubtractSymmetricCorrectionsOf(double* __restrict__ p, const double* __restrict__ k,
                                                          const double* __restrict__ v, Eigen::Index n) {
+  if (n < detail::kLanes) {
+    for (Eigen::Index c = 0; c < n; ++c) {
+      for (Eigen::Index r = 0; r < n; ++r) {
+        double sum = k[r] * v[c] + v[r] * k[c];
+        for (int e = 1; e < Count; ++e) sum += k[e * n + r] * v[e * n + c] + v[e * n + r] * k[e * n + c];
+        p[c * n + r] -= sum;
+      }
+    }
+    return;
+  }
+  using detail::Double4, detail::Load4;
   for (Eigen::Index c = 0; c < n; ++c) {
-    double kc[Count], vc[Count];
+    Double4 kc[Count], vc[Count];
     for (int e = 0; e < Count; ++e) {
-      kc[e] = k[e * n + c];
-      vc[e] = v[e * n + c];
+      kc[e] = detail::Broadcast4(k[e * n + c]);
+      vc[e] = detail::Broadcast4(v[e * n + c]);
     }
     double* __restrict__ column = p + c * n;
-    for (Eigen::Index r = 0; r < n; ++r) {
-      double sum = k[r] * vc[0] + v[r] * kc[0];
-      for (int e = 1; e < Count; ++e) sum += k[e * n + r] * vc[e] + v[e * n + r] * kc[e];
-      column[r] -= sum;
-    }
+    detail::ForEachRowBlock(n, column, [&](Eigen::Index r) {  // the scalar loop's operations, lane-wise
+      Double4 sum = Load4(k + r) * vc[0] + Load4(v + r) * kc[0];
+      for (int e = 1; e < Count; ++e) sum += Load4(k + e * n + r) * vc[e] + Load4(v + e * n + r) * kc[e];
+      return Load4(column + r) - sum;
+    });
   }
 }
 
