@@ -65,9 +65,10 @@ ROWLOC_INLINE Double4 Broadcast4(double x) { return Double4{x, x, x, x}; }
 /// remainder: block(r) gives the new rows [r, r + 4) from the old ones; the last block starts at
 /// n - 4 and may overlap the one before it, so it is computed from the old values before any row is
 /// written (an overlapped row gets the same value twice). For n ~ 10-30 the remainder loops of a
-/// compiled vector loop cost about a third of the instructions.
+/// compiled vector loop cost about a third of the instructions. target is not restrict-qualified:
+/// block reads the same rows through the caller's pointer, and the tail must be read first.
 template <class Block>
-ROWLOC_INLINE void ForEachRowBlock(Eigen::Index n, double* __restrict__ target, Block&& block) {
+ROWLOC_INLINE void ForEachRowBlock(Eigen::Index n, double* target, Block&& block) {
   const Eigen::Index last = n - kLanes;
   const Double4 tail = block(last);
   for (Eigen::Index r = 0; r < last; r += kLanes) Store4(target + r, block(r));
@@ -80,7 +81,7 @@ ROWLOC_INLINE void ForEachRowBlock(Eigen::Index n, double* __restrict__ target, 
 /// overlap target.
 template <int Count, bool Accumulate>
 ROWLOC_INLINE void CombineColumnsOf(const double* const* sources, const double* scales, Eigen::Index n,
-                             double* __restrict__ target) {
+                                    double* __restrict__ target) {
   if (n < kLanes) {
     for (Eigen::Index r = 0; r < n; ++r) {
       double sum = Accumulate ? target[r] + scales[0] * sources[0][r] : scales[0] * sources[0][r];
@@ -101,7 +102,7 @@ ROWLOC_INLINE void CombineColumnsOf(const double* const* sources, const double* 
 /// CombineColumnsOf for a run-time count, 1 <= count <= kMaxCombinedColumns.
 template <bool Accumulate>
 ROWLOC_INLINE void CombineColumns(const double* const* sources, const double* scales, int count, Eigen::Index n,
-                           double* __restrict__ target) {
+                                  double* __restrict__ target) {
   switch (count) {
     case 1: CombineColumnsOf<1, Accumulate>(sources, scales, n, target); break;
     case 2: CombineColumnsOf<2, Accumulate>(sources, scales, n, target); break;
