@@ -52,7 +52,9 @@ BoostPoint ToBoost(const Eigen::Vector2d& p) { return BoostPoint(p.x(), p.y()); 
 
 Eigen::Vector2d FromBoost(const BoostPoint& p) { return {p.get<0>(), p.get<1>()}; }
 
-SegmentQueryCache::Box FromBoost(const BoostBox& box) { return {FromBoost(box.min_corner()), FromBoost(box.max_corner())}; }
+SegmentQueryCache::Box FromBoost(const BoostBox& box) {
+  return {FromBoost(box.min_corner()), FromBoost(box.max_corner())};
+}
 
 Segment2 ToSegment(const BoostSegment& s) {
   return Segment2{{bg::get<0, 0>(s), bg::get<0, 1>(s)}, {bg::get<1, 0>(s), bg::get<1, 1>(s)}};
@@ -218,7 +220,9 @@ struct SegmentIndex::Impl {
     if (items == nullptr) {
       SegmentQueryCache::Box grown;
       std::vector<SegmentQueryCache::Item>& stored = use.cache->Store(query, grown);
-      const auto each = [&](const CastValue& v) { stored.push_back({FromBoost(v.first), ToSegment(v), v.second.entry}); };
+      const auto each = [&](const CastValue& v) {
+        stored.push_back({FromBoost(v.first), ToSegment(v), v.second.entry});
+      };
       cast_tree.query(bgi::intersects(BoostBox(ToBoost(grown.lo), ToBoost(grown.hi))),
                       boost::make_function_output_iterator(each));
       items = &stored;

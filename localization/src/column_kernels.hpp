@@ -93,7 +93,8 @@ ROWLOC_INLINE void CombineColumnsOf(const double* const* sources, const double* 
   Double4 factor[Count];
   for (int e = 0; e < Count; ++e) factor[e] = Broadcast4(scales[e]);
   ForEachRowBlock(n, target, [&](Eigen::Index r) {  // the same operations as the scalar loop, lane-wise
-    Double4 sum = Accumulate ? Load4(target + r) + factor[0] * Load4(sources[0] + r) : factor[0] * Load4(sources[0] + r);
+    const Double4 first = factor[0] * Load4(sources[0] + r);
+    Double4 sum = Accumulate ? Load4(target + r) + first : first;
     for (int e = 1; e < Count; ++e) sum += factor[e] * Load4(sources[e] + r);
     return sum;
   });

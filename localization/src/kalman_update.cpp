@@ -336,11 +336,11 @@ UpdateOutcome ScalarUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covarian
 /// v_i = u_i - (s_i / 2) k_i (ApplyScalarCorrection). All corrections are computed before P changes:
 /// with U = P H^T (sparse H), P_(i-1) = P - sum_(j<i) (k_j v_j^T + v_j k_j^T) gives exactly
 ///   u_i = U_i - sum_(j<i) (k_j (v_j . h_i) + v_j (k_j . h_i)),
-/// and then they are applied to P in one pass (SubtractSymmetricCorrections). The s_i are the pivots of the LDL^T
-/// factorization of S = H P H^T + R, so S is positive definite iff every s_i > 0, and the joint
-/// NIS y^T S^-1 y is sum_i y_i'^2 / s_i (the chain rule of the Gaussian likelihood): the gate needs
-/// no factorization, and a gated update leaves x and P untouched. Tall: n x m; Square: m x m;
-/// Vector: n.
+/// and then they are applied to P in one pass (SubtractSymmetricCorrections). The s_i are the
+/// pivots of the LDL^T factorization of S = H P H^T + R, so S is positive definite iff every
+/// s_i > 0, and the joint NIS y^T S^-1 y is sum_i y_i'^2 / s_i (the chain rule of the Gaussian
+/// likelihood): the gate needs no factorization, and a gated update leaves x and P untouched.
+/// Tall: n x m; Square: m x m; Vector: n.
 template <typename Tall, typename Square, typename Vector>
 UpdateOutcome SequentialUpdateWith(Eigen::VectorXd& state, Eigen::MatrixXd& covariance,
                                    const VectorRef& innovation, const MatrixRef& jacobian,

@@ -174,7 +174,8 @@ TEST(SegmentIndexWithQueryCache, RandomConesAndAnIndexSwitchGetTheSameHits) {
   for (int q = 0; q < 600; ++q) {
     apex += Eigen::Vector2d(step(rng), step(rng));  // a random walk: hits and misses
     const double a = angle(rng);
-    const Cone2 cone{apex, {std::cos(a), std::sin(a)}, aperture(rng), q % 3 == 0 ? std::numeric_limits<double>::infinity() : 4.0};
+    const double max_range_m = q % 3 == 0 ? std::numeric_limits<double>::infinity() : 4.0;
+    const Cone2 cone{apex, {std::cos(a), std::sin(a)}, aperture(rng), max_range_m};
     const SegmentIndex& index = (q / 50) % 2 == 0 ? first : second;  // the cache follows the index
     const double window_m = window(rng);
     index.ConeCastNearest(cone, window_m, plain);
