@@ -14,9 +14,15 @@
 // usable geometry, a state becomes non-finite, a lane sees no accepted update or over 1 % of the
 // echoes are gated out. Counters: per_echo (time / 4), the shares of the echoes that updated the
 // filter, were gated out, had two candidate rows, or (cut methods) whose slab held the whole
-// ellipse (no_info) or missed it (contra); states = the filter's state dimension.
+// ellipse (no_info) or missed it (contra), and the share of the R-tree box queries answered from
+// the filter's query cache (cache_hit; standing still, only the first queries after a reset miss);
+// states = the filter's state dimension.
 // BM_MapAidedUpdate4SensorsOneStamp/range: the same with the four echoes at one time stamp (one
 // prediction per update instead of four), to tell the predictions from the rest.
+// BM_MapAidedUpdate4SensorsDriving/range: the vehicle drives along its lane instead, 10 cm between
+// two echoes of one sensor (as at 1 m/s with 10 Hz sensors), 10 m per block; the filter learns the
+// speed from a wheels message at each reset (RunUpdates), so its cone casts move with the truth and
+// the cache misses as it would in a run.
 // BM_RowMapRangingCandidates: RowMapRanging::Candidates alone, one sensor (us_front_left), from 4096
 // filter poses in random lanes, with the window the filter uses at the SetPose covariance.
 // Run the Release build with
@@ -50,6 +56,10 @@ namespace loc = rowloc::localization;
 using rowloc::mapio::VehicleConfig;
 
 constexpr double kMessageStepS = 0.0025;  // between two echoes
+// The driving variant: 10 cm between two echoes of one sensor, as at 1 m/s and 10 Hz, with the echo
+// stream's step below max_prediction_step_s (0.02 s; a 0.02 s step rounds to two predictions).
+constexpr double kDrivingStepS = 0.0125;
+constexpr double kDrivingSpeedMps = 2.0;
 constexpr int kUpdatesPerBlock = 100;     // 4-sensor updates between two resets of the filter
 constexpr std::size_t kBlocks = 64;       // lanes visited in turn
 constexpr std::size_t kPoses = 4096;      // poses of the candidates benchmark
@@ -88,19 +98,26 @@ std::vector<loc::RangeSensorMount> Mounts(const VehicleConfig& v, const loc::Fil
   return mounts;
 }
 
+/// The pose on the centre line of lane `corridor` at arc parameter u along the (bowed) rows, facing
+/// along the rows (or against them: backwards).
+Eigen::Vector3d LanePoseAt(const geo::SampleRowMapParams& params, int corridor, double u, bool backwards) {
+  const Eigen::Vector2d t(std::cos(params.heading_rad), std::sin(params.heading_rad));
+  const Eigen::Vector2d n(-t.y(), t.x());
+  const double xi = 2.0 * u / params.row_length_m - 1.0;
+  const double offset = (corridor + 0.5) * params.row_spacing_m + params.bow_m * (1.0 - xi * xi);
+  const double slope = -4.0 * params.bow_m * xi / params.row_length_m;  // d offset / du
+  const Eigen::Vector2d p = u * t + offset * n;
+  return {p.x(), p.y(), params.heading_rad + std::atan(slope) + (backwards ? std::numbers::pi : 0.0)};
+}
+
 /// A pose in the middle of a random lane, along the (bowed) row, forwards or backwards.
 Eigen::Vector3d LanePose(const geo::SampleRowMapParams& params, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> along(5.0, params.row_length_m - 5.0);
   std::uniform_int_distribution<int> corridor(0, params.row_count - 2);
   std::bernoulli_distribution backwards(0.5);
-  const Eigen::Vector2d t(std::cos(params.heading_rad), std::sin(params.heading_rad));
-  const Eigen::Vector2d n(-t.y(), t.x());
   const double u = along(rng);
-  const double xi = 2.0 * u / params.row_length_m - 1.0;
-  const double offset = (corridor(rng) + 0.5) * params.row_spacing_m + params.bow_m * (1.0 - xi * xi);
-  const double slope = -4.0 * params.bow_m * xi / params.row_length_m;  // d offset / du
-  const Eigen::Vector2d p = u * t + offset * n;
-  return {p.x(), p.y(), params.heading_rad + std::atan(slope) + (backwards(rng) ? std::numbers::pi : 0.0)};
+  const int lane = corridor(rng);
+  return LanePoseAt(params, lane, u, backwards(rng));
 }
 
 Eigen::Vector3d Perturbed(const Eigen::Vector3d& pose, std::mt19937_64& rng) {
@@ -122,6 +139,9 @@ struct World {
     std::vector<loc::SensorMessage> messages;   ///< kUpdatesPerBlock x 4 echoes, from t = kMessageStepS
   };
   std::vector<Block> blocks;
+  /// The same number of blocks for the driving variant: the truth drives along its lane at
+  /// kDrivingSpeedMps, the four sensors echo in turn kDrivingStepS apart (10 m per block).
+  std::vector<Block> driving_blocks;
 
   World() {
     std::mt19937_64 rng(5);
@@ -138,6 +158,32 @@ struct World {
         }
       }
       blocks.push_back(std::move(block));
+    }
+    AddDrivingBlocks();
+  }
+  void AddDrivingBlocks() {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> n01;
+    std::uniform_int_distribution<int> corridor(0, params.row_count - 2);
+    std::bernoulli_distribution backwards(0.5);
+    const double drive_m = kDrivingSpeedMps * kDrivingStepS * 4.0 * kUpdatesPerBlock;
+    for (std::size_t b = 0; b < kBlocks; ++b) {
+      const int lane = corridor(rng);
+      const bool back = backwards(rng);  // facing -u: the vehicle drives forwards, u decreases
+      std::uniform_real_distribution<double> start(back ? 5.0 + drive_m : 5.0,
+                                                   params.row_length_m - 5.0 - (back ? 0.0 : drive_m));
+      const double u0 = start(rng);
+      const double direction = back ? -1.0 : 1.0;
+      Block block{Perturbed(LanePoseAt(params, lane, u0, back), rng), {}};
+      for (int k = 0; k < kUpdatesPerBlock; ++k) {
+        for (std::size_t s = 0; s < mounts.size(); ++s) {
+          const double t = kDrivingStepS * static_cast<double>(4 * k + static_cast<int>(s) + 1);
+          const Eigen::Vector3d truth = LanePoseAt(params, lane, u0 + direction * kDrivingSpeedMps * t, back);
+          const double range = TrueRanges(truth)[s] + config.map_aided.range_sigma_m * n01(rng);
+          block.messages.push_back(loc::UltrasonicMessage{t, vehicle.ultrasonic[s].name, s, range});
+        }
+      }
+      driving_blocks.push_back(std::move(block));
     }
   }
   /// The echo of each sensor at `pose`: the nearest point of the outlines in its cone.
@@ -166,6 +212,13 @@ Eigen::Matrix3d PoseCovariance() { return kPoseSigma.cwiseAbs2().asDiagonal(); }
 struct Tally {
   long updates = 0, accepted = 0;
   loc::MapAidedStats stats;
+  std::size_t cache_hits = 0, cache_queries = 0;  ///< the filter's R-tree query cache
+  void Add(const loc::VehicleEkf& ekf) {
+    const geo::SegmentQueryCache& cache = ekf.row_search_cache();  // a reset copies the empty one of `base`
+    cache_hits += cache.hits();
+    cache_queries += cache.hits() + cache.misses();
+    Add(ekf.map_aided_stats());
+  }
   void Add(const loc::MapAidedStats& s) {
     stats.echoes += s.echoes;
     stats.no_segment += s.no_segment;
@@ -188,12 +241,20 @@ inline void FourEchoes(loc::VehicleEkf& ekf, const World::Block& block, int k, T
   }
 }
 
-/// one_stamp: the four echoes of an update share one time stamp (one prediction per update, of
-/// 4 kMessageStepS) instead of following each other kMessageStepS apart (four predictions).
-void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_stamp) {
+/// kStanding: the echoes of a vehicle standing in its lane, kMessageStepS apart (four predictions
+/// per update); kOneStamp: the same with the four echoes of an update at one time stamp (one
+/// prediction per update, of 4 kMessageStepS); kDriving: World::driving_blocks. There the filter
+/// learns the speed from one wheels message at each reset (outside the timing) and keeps it over
+/// the block: its velocity starts with sigma 5 m/s (so that message is not gated out), its
+/// acceleration states at 1 mm/s^2 with a jerk noise of 1 mm/s^3/sqrt(Hz) (default: 0.3, 0.5 and
+/// 2), since the benchmark feeds no IMU or odometry between the echoes. The same operations run
+/// whatever these values.
+enum class Variant { kStanding, kOneStamp, kDriving };
+
+void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, Variant variant) {
   const World& w = TheWorld();
-  std::vector<World::Block> blocks = w.blocks;
-  if (one_stamp) {
+  std::vector<World::Block> blocks = variant == Variant::kDriving ? w.driving_blocks : w.blocks;
+  if (variant == Variant::kOneStamp) {
     for (World::Block& block : blocks) {
       for (std::size_t i = 0; i < block.messages.size(); ++i) {
         std::get<loc::UltrasonicMessage>(block.messages[i]).time_s = 4.0 * kMessageStepS * static_cast<double>(i / 4 + 1);
@@ -204,12 +265,21 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_st
     state.SkipWithError("the vehicle does not have 4 ultrasonic sensors");
     return;
   }
-  loc::VehicleEkf base(w.vehicle, Config(method), w.map.origin, WheelNames(w.vehicle));
+  loc::FilterConfig config = Config(method);
+  if (variant == Variant::kDriving) {
+    config.initialisation.velocity_sigma_mps = 5.0;  // the reset's wheels message is not gated out
+    config.initialisation.acceleration_sigma_mps2 = 0.001;
+    config.process_noise.jerk_mps3_per_sqrt_hz = 0.001;
+  }
+  loc::VehicleEkf base(w.vehicle, config, w.map.origin, WheelNames(w.vehicle));
   base.AttachRowMap(w.map);
   base.SetPose(0.0, blocks[0].start, PoseCovariance());
+  std::vector<double> wheel_speeds;
+  for (const auto& wheel : w.vehicle.wheels) wheel_speeds.push_back(kDrivingSpeedMps / wheel.nominal_radius_m);
   const auto reset = [&](loc::VehicleEkf& ekf, std::size_t b) {
     ekf = base;
     ekf.SetPose(0.0, blocks[b].start, PoseCovariance());
+    if (variant == Variant::kDriving) ekf.Process(loc::WheelsMessage{0.0, wheel_speeds, std::nullopt});
   };
 
   // Setup check: one pass over every block, untimed. Every echo must find its row, no state may
@@ -221,7 +291,7 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_st
     reset(ekf, b);
     const long accepted_before = check.accepted;
     for (int k = 0; k < kUpdatesPerBlock; ++k) FourEchoes(ekf, blocks[b], k, check);
-    check.Add(ekf.map_aided_stats());
+    check.Add(ekf);
     if (!ekf.state().allFinite() || !ekf.covariance().allFinite() || check.accepted == accepted_before) {
       state.SkipWithError(("lane " + std::to_string(b) + ": state not finite or no echo accepted").c_str());
       return;
@@ -243,7 +313,7 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_st
   for (auto _ : state) {
     if (k == kUpdatesPerBlock) {
       state.PauseTiming();
-      tally.Add(ekf.map_aided_stats());
+      tally.Add(ekf);
       b = (b + 1) % kBlocks;
       reset(ekf, b);
       k = 0;
@@ -251,7 +321,7 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_st
     }
     FourEchoes(ekf, blocks[b], k++, tally);
   }
-  tally.Add(ekf.map_aided_stats());
+  tally.Add(ekf);
   benchmark::DoNotOptimize(ekf.state().data());
 
   const double echoes = static_cast<double>(tally.stats.echoes);
@@ -264,13 +334,18 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, bool one_st
   state.counters["ambiguous"] = static_cast<double>(tally.stats.ambiguous) / echoes;
   state.counters["no_info"] = static_cast<double>(tally.stats.uninformative) / echoes;   // cut methods
   state.counters["contra"] = static_cast<double>(tally.stats.contradicting) / echoes;  // cut methods
+  const double queries = static_cast<double>(std::max<std::size_t>(tally.cache_queries, 1));
+  state.counters["cache_hit"] = static_cast<double>(tally.cache_hits) / queries;
 }
 
 void BM_MapAidedUpdate4Sensors(benchmark::State& state, loc::MapAidedMethod method) {
-  RunUpdates(state, method, false);
+  RunUpdates(state, method, Variant::kStanding);
 }
 void BM_MapAidedUpdate4SensorsOneStamp(benchmark::State& state, loc::MapAidedMethod method) {
-  RunUpdates(state, method, true);
+  RunUpdates(state, method, Variant::kOneStamp);
+}
+void BM_MapAidedUpdate4SensorsDriving(benchmark::State& state, loc::MapAidedMethod method) {
+  RunUpdates(state, method, Variant::kDriving);
 }
 
 void BM_RowMapRangingCandidates(benchmark::State& state) {
@@ -300,4 +375,5 @@ BENCHMARK_CAPTURE(BM_MapAidedUpdate4Sensors, range, loc::MapAidedMethod::kRange)
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4Sensors, ellipsoid_cut, loc::MapAidedMethod::kEllipsoidCut);
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4Sensors, ellipsoid_cut_deprior, loc::MapAidedMethod::kEllipsoidCutDeprior);
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4SensorsOneStamp, range, loc::MapAidedMethod::kRange);
+BENCHMARK_CAPTURE(BM_MapAidedUpdate4SensorsDriving, range, loc::MapAidedMethod::kRange);
 BENCHMARK(BM_RowMapRangingCandidates);
