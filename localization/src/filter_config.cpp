@@ -37,11 +37,11 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"process_noise.gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz},
       {"process_noise.accel_bias_mps2_per_sqrt_hz", q.accel_bias_mps2_per_sqrt_hz},
       {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m},
-      {"slip_aware_odometry.slip_gradient_initial_nm", s.slip_gradient_initial_nm},
-      {"slip_aware_odometry.slip_gradient_sigma_nm", s.slip_gradient_sigma_nm},
-      {"slip_aware_odometry.min_slip_gradient_nm", s.min_slip_gradient_nm},
+      {"slip_aware_odometry.slip_compliance_initial", s.slip_compliance_initial},
+      {"slip_aware_odometry.slip_compliance_sigma", s.slip_compliance_sigma},
+      {"slip_aware_odometry.max_model_slip", s.max_model_slip, true},
       {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m},
-      {"slip_aware_odometry.slip_gradient_noise_nm_per_sqrt_m", s.slip_gradient_noise_nm_per_sqrt_m},
+      {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
       {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
       {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps},
@@ -91,10 +91,18 @@ FilterConfig ReadConfig(Reader& root) {
   }
   {
     Reader s = root.Object("slip_aware_odometry");
+    for (const char* old : {"slip_gradient_initial_nm", "slip_gradient_sigma_nm", "min_slip_gradient_nm",
+                            "slip_gradient_noise_nm_per_sqrt_m"}) {
+      if (s.Has(old)) {
+        s.Fail(s.Key(old), "was replaced on 2026-12-02 by the slip compliance kappa = N r / k_s (slip_compliance_initial, "
+                           "slip_compliance_sigma, max_model_slip, slip_compliance_noise_per_sqrt_m; "
+                           "docs/localization-filter.md §5.2)");
+      }
+    }
     c.slip_aware_odometry = {s.Bool("enabled"), s.Number("rolling_radius_sigma_m"),
-                             s.Number("slip_gradient_initial_nm"), s.Number("slip_gradient_sigma_nm"),
-                             s.Number("min_slip_gradient_nm"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
-                             s.Number("slip_gradient_noise_nm_per_sqrt_m")};
+                             s.Number("slip_compliance_initial"), s.Number("slip_compliance_sigma"),
+                             s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
+                             s.Number("slip_compliance_noise_per_sqrt_m")};
     s.RejectUnknownKeys();
   }
   {

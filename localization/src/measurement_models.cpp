@@ -69,6 +69,11 @@ double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleC
   return CentreOf(x, vehicle, layout, i).longitudinal();
 }
 
+double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t i) {
+  const double load_n = vehicle.mass_kg * kStandardGravityMps2 / static_cast<double>(vehicle.wheels.size());
+  return load_n * vehicle.wheels[i].nominal_radius_m;
+}
+
 double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                           const StateLayout& layout, std::size_t i) {
   return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
@@ -92,12 +97,12 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     const double c = w.c, s = w.s;
     const double v = w.longitudinal() - tau * (c * ax + s * ay);  // the speed the encoder reports
     const double radius = WheelRollingRadius(x, vehicle, layout, i);
-    double gain = 1.0;  // k / (k - T)
+    double gain = 1.0;  // 1 / (1 - kappa mu) = k_s / (k_s - T)
     if (layout.slip_aware()) {
-      const double k = x(layout.slip_gradient[i]);
-      const double torque = torque_nm ? (*torque_nm)[i] : 0.0;
-      gain = k / (k - torque);
-      m.jacobian(row, layout.slip_gradient[i]) = v / radius * (-torque / ((k - torque) * (k - torque)));
+      const double kappa = x(layout.slip_compliance[i]);
+      const double mu = torque_nm ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i) : 0.0;
+      gain = 1.0 / (1.0 - kappa * mu);
+      m.jacobian(row, layout.slip_compliance[i]) = v / radius * mu * gain * gain;
       m.jacobian(row, layout.rolling_radius[i]) = -v * gain / (radius * radius);
     }
     const double dv = gain / radius;  // d h / d v

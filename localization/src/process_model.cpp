@@ -82,8 +82,8 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
     const double distance = WheelDistance(vehicle.wheels[i], twist, dt);
     p(layout.rolling_radius[i], layout.rolling_radius[i]) +=
         s.rolling_radius_noise_m_per_sqrt_m * s.rolling_radius_noise_m_per_sqrt_m * distance;
-    p(layout.slip_gradient[i], layout.slip_gradient[i]) +=
-        s.slip_gradient_noise_nm_per_sqrt_m * s.slip_gradient_noise_nm_per_sqrt_m * distance;
+    p(layout.slip_compliance[i], layout.slip_compliance[i]) +=
+        s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m * distance;
   }
 }
 

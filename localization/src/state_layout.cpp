@@ -7,7 +7,7 @@ StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_awar
   const std::size_t n = vehicle.wheels.size();
   layout.steering.assign(n, -1);
   layout.rolling_radius.assign(n, -1);
-  layout.slip_gradient.assign(n, -1);
+  layout.slip_compliance.assign(n, -1);
   int next = kBaseSize;
   for (std::size_t i = 0; i < n; ++i) {
     if (vehicle.wheels[i].steerable) layout.steering[i] = next++;
@@ -15,7 +15,7 @@ StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_awar
   if (slip_aware_odometry) {
     for (std::size_t i = 0; i < n; ++i) {
       layout.rolling_radius[i] = next++;
-      layout.slip_gradient[i] = next++;
+      layout.slip_compliance[i] = next++;
     }
   }
   if (accel_bias) {
@@ -34,7 +34,7 @@ std::vector<std::string> StateLayout::Names(const mapio::VehicleConfig& vehicle)
     const std::string& wheel = vehicle.wheels[i].name;
     if (steering[i] >= 0) names[static_cast<std::size_t>(steering[i])] = "delta_" + wheel;
     if (rolling_radius[i] >= 0) names[static_cast<std::size_t>(rolling_radius[i])] = "R_" + wheel;
-    if (slip_gradient[i] >= 0) names[static_cast<std::size_t>(slip_gradient[i])] = "k_" + wheel;
+    if (slip_compliance[i] >= 0) names[static_cast<std::size_t>(slip_compliance[i])] = "kappa_" + wheel;
   }
   if (accel_bias >= 0) {
     names[static_cast<std::size_t>(accel_bias)] = "bax_mps2";

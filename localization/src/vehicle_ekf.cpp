@@ -179,7 +179,7 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   if (!initialised_) return result;
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
-  ProjectStates();  // k_s above the new torque before linearizing k / (k - T)
+  ProjectStates();  // kappa mu <= max_model_slip for the new torque before linearizing 1 / (1 - kappa mu)
   UpdateBuffers& b = update_buffers_;
   WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s, b.wheels);
   const auto m = static_cast<Eigen::Index>(n);
@@ -254,14 +254,16 @@ void VehicleEkf::ProjectStates() {
     if (d >= 0) x_(d) = WrapAngle(x_(d));
   }
   if (!layout_.slip_aware()) return;
-  const double k_min = config_.slip_aware_odometry.min_slip_gradient_nm;
+  const double max_slip = config_.slip_aware_odometry.max_model_slip;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;
     double& radius = x_(layout_.rolling_radius[i]);
     radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
     const double torque = last_torque_nm_.empty() ? 0.0 : last_torque_nm_[i];
-    double& k = x_(layout_.slip_gradient[i]);
-    k = std::max(k, std::max(torque, 0.0) + k_min);
+    const double mu = torque / WheelTractionScaleNm(vehicle_, i);
+    double& kappa = x_(layout_.slip_compliance[i]);
+    kappa = std::max(kappa, 0.0);
+    if (mu > 0.0) kappa = std::min(kappa, max_slip / mu);
   }
 }
 

@@ -152,8 +152,8 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
     if (const int r = layout_.rolling_radius[i]; r >= 0) {
       x_(r) = vehicle_.wheels[i].nominal_radius_m;
       variance(r) = slip.rolling_radius_sigma_m * slip.rolling_radius_sigma_m;
-      x_(layout_.slip_gradient[i]) = slip.slip_gradient_initial_nm;
-      variance(layout_.slip_gradient[i]) = slip.slip_gradient_sigma_nm * slip.slip_gradient_sigma_nm;
+      x_(layout_.slip_compliance[i]) = slip.slip_compliance_initial;
+      variance(layout_.slip_compliance[i]) = slip.slip_compliance_sigma * slip.slip_compliance_sigma;
     }
   }
   if (layout_.accel_bias >= 0) {

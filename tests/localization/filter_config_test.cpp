@@ -42,11 +42,11 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   const SlipAwareOdometryConfig &sa = a.slip_aware_odometry, &sb = b.slip_aware_odometry;
   EXPECT_EQ(sa.enabled, sb.enabled);
   EXPECT_EQ(sa.rolling_radius_sigma_m, sb.rolling_radius_sigma_m);
-  EXPECT_EQ(sa.slip_gradient_initial_nm, sb.slip_gradient_initial_nm);
-  EXPECT_EQ(sa.slip_gradient_sigma_nm, sb.slip_gradient_sigma_nm);
-  EXPECT_EQ(sa.min_slip_gradient_nm, sb.min_slip_gradient_nm);
+  EXPECT_EQ(sa.slip_compliance_initial, sb.slip_compliance_initial);
+  EXPECT_EQ(sa.slip_compliance_sigma, sb.slip_compliance_sigma);
+  EXPECT_EQ(sa.max_model_slip, sb.max_model_slip);
   EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
-  EXPECT_EQ(sa.slip_gradient_noise_nm_per_sqrt_m, sb.slip_gradient_noise_nm_per_sqrt_m);
+  EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
   const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
   EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
   EXPECT_EQ(ia.heading_sigma_rad, ib.heading_sigma_rad);
@@ -195,6 +195,28 @@ TEST(FilterConfig, UnknownKeysAreNamed) {
   EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: lidar: unknown key"));
 }
 
+// The torque/slip gradient keys of files written before the slip compliance replaced k_s as the
+// state: the error names the key and its replacement instead of only "unknown key".
+TEST(FilterConfig, RetiredSlipGradientKeysNameTheirReplacement) {
+  for (const char* old : {"slip_gradient_initial_nm", "slip_gradient_sigma_nm", "min_slip_gradient_nm",
+                          "slip_gradient_noise_nm_per_sqrt_m"}) {
+    json edited = DefaultJson();
+    edited["slip_aware_odometry"][old] = 500.0;
+    const std::string error = ErrorOf(edited);
+    EXPECT_THAT(error, HasSubstr(std::string("slip_aware_odometry.") + old + ": was replaced")) << old;
+    EXPECT_THAT(error, HasSubstr("slip_compliance_initial")) << old;
+  }
+}
+
+TEST(FilterConfig, MaxModelSlipMustBeBelowOne) {
+  FilterConfig config;
+  config.slip_aware_odometry.max_model_slip = 1.0;
+  EXPECT_EQ(FilterConfigProblem(config),
+            std::optional<std::string>("slip_aware_odometry.max_model_slip must be in (0, 1)"));
+  config.slip_aware_odometry.max_model_slip = 0.95;
+  EXPECT_FALSE(FilterConfigProblem(config).has_value());
+}
+
 TEST(FilterConfig, WrongTypesAreNamed) {
   const json base = DefaultJson();
   for (const auto& [path, pointer] : Leaves(base)) {
@@ -241,7 +263,7 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   for (const auto& [path, pointer] : Leaves(base)) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
     if (path == "wheels.encoder_low_pass_time_constant_s") continue;  // 0 is valid (no filter): below
-    const bool probability = path.ends_with("gate_probability");
+    const bool probability = path.ends_with("gate_probability") || path == "slip_aware_odometry.max_model_slip";
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
       edited[pointer] = bad;
@@ -314,8 +336,8 @@ TEST(FilterConfig, ProblemOfInCodeConfigsNamesTheField) {
        [](FilterConfig& c, double v) { c.process_noise.jerk_mps3_per_sqrt_hz = v; }},
       {"process_noise.gyro_bias_radps_per_sqrt_hz",
        [](FilterConfig& c, double v) { c.process_noise.gyro_bias_radps_per_sqrt_hz = v; }},
-      {"slip_aware_odometry.slip_gradient_initial_nm",
-       [](FilterConfig& c, double v) { c.slip_aware_odometry.slip_gradient_initial_nm = v; }},
+      {"slip_aware_odometry.slip_compliance_initial",
+       [](FilterConfig& c, double v) { c.slip_aware_odometry.slip_compliance_initial = v; }},
       {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
        [](FilterConfig& c, double v) { c.slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m = v; }},
       {"initialisation.heading_baseline_m", [](FilterConfig& c, double v) { c.initialisation.heading_baseline_m = v; }},

@@ -39,7 +39,7 @@ Eigen::VectorXd RandomState(const StateLayout& layout, std::mt19937& rng) {
   for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
     if (layout.steering[i] >= 0) x(layout.steering[i]) = 1.5 * u(rng);
     if (layout.rolling_radius[i] >= 0) x(layout.rolling_radius[i]) = 0.2 + 0.05 * u(rng);
-    if (layout.slip_gradient[i] >= 0) x(layout.slip_gradient[i]) = 500.0 + 300.0 * u(rng);
+    if (layout.slip_compliance[i] >= 0) x(layout.slip_compliance[i]) = 0.2 + 0.1 * u(rng);
   }
   return x;
 }
@@ -78,7 +78,7 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
       for (int trial = 0; trial < 40; ++trial) {
         const Eigen::VectorXd x = RandomState(layout, rng);
         std::vector<double> torques(vehicle.wheels.size());
-        for (double& t : torques) t = torque(rng);  // |T| <= 100 < k_s
+        for (double& t : torques) t = torque(rng);  // kappa |T| / (N r) <= 0.3 * 100 / 40 < 1
         const Eigen::Vector2d gnss = Horizontal(vehicle.gnss_antenna.position_m);
         const Eigen::Vector2d imu = Horizontal(vehicle.imu.position_m);
         const Eigen::Vector2d arm(0.3 * (trial % 5) - 0.6, 0.7 - 0.2 * (trial % 7));  // also non-shipped arms
@@ -131,7 +131,7 @@ TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
       const auto row = static_cast<Eigen::Index>(i);
       EXPECT_EQ(m.jacobian(row, layout.steering[other]), 0.0);
       EXPECT_EQ(m.jacobian(row, layout.rolling_radius[other]), 0.0);
-      EXPECT_EQ(m.jacobian(row, layout.slip_gradient[other]), 0.0);
+      EXPECT_EQ(m.jacobian(row, layout.slip_compliance[other]), 0.0);
     }
     for (int base : {L::kX, L::kY, L::kPhi, L::kAx, L::kAy, L::kGyroBias}) {
       EXPECT_EQ(m.jacobian(static_cast<Eigen::Index>(i), base), 0.0);
@@ -290,14 +290,20 @@ TEST(WheelSpeedModel, SlipAwareOdometerFollowsSeed004) {
     const StateLayout layout = StateLayout::For(vehicle, true);
     for (int trial = 0; trial < 20; ++trial) {
       const Eigen::VectorXd x = RandomState(layout, rng);
+      // Traction coefficients mu = T / (N r) from -0.4 (braking) up to 1.1; kappa mu stays below 0.4.
       std::vector<double> torques;
-      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) torques.push_back(40.0 * static_cast<double>(i) - 30.0);
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        torques.push_back((0.5 * static_cast<double>(i) - 0.4) * WheelTractionScaleNm(vehicle, i));
+      }
       const LinearizedMeasurement with = WheelSpeedModel(x, vehicle, layout, torques);
       const LinearizedMeasurement without = WheelSpeedModel(x, vehicle, layout, std::nullopt);
       for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
         const auto row = static_cast<Eigen::Index>(i);
         const double v = WheelLongitudinalVelocity(x, vehicle, layout, i);
-        const double radius = x(layout.rolling_radius[i]), k = x(layout.slip_gradient[i]);
+        // Seed 004's form with its torque/slip gradient k_s = N r / kappa (N = m g / wheel count).
+        const double load_n = vehicle.mass_kg * 9.80665 / static_cast<double>(vehicle.wheels.size());
+        const double k = load_n * vehicle.wheels[i].nominal_radius_m / x(layout.slip_compliance[i]);
+        const double radius = x(layout.rolling_radius[i]);
         EXPECT_EQ(WheelRollingRadius(x, vehicle, layout, i), radius);
         EXPECT_NEAR(with.predicted(row), v * k / (radius * (k - torques[i])), 1e-12 * std::abs(v / radius) + 1e-15);
         EXPECT_NEAR(without.predicted(row), v / radius, 1e-12 * std::abs(v / radius) + 1e-15);  // T = 0

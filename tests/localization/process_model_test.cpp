@@ -206,7 +206,7 @@ TEST(PredictStep, CovarianceIsFPFtPlusQWithIdentityOutsideTheBase) {
       PredictStep(vehicle, layout, config, x, p, 0.02);
       EXPECT_EQ(x, x_model);
       Eigen::MatrixXd delta = p - f * p0 * f.transpose();
-      // The increment is diagonal: the documented Q (plus the distance terms of R_w and k_s).
+      // The increment is diagonal: the documented Q (plus the distance terms of R_w and kappa).
       const Eigen::VectorXd q = ExpectedBaseNoise(layout, config, 0.02);
       for (Eigen::Index i = 0; i < n; ++i) {
         for (Eigen::Index j = 0; j < n; ++j) {
@@ -299,7 +299,7 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
     const Eigen::VectorXd still = increments(0.0, 0.0, 0.0, 0.05);
     for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
       EXPECT_EQ(still(layout.rolling_radius[i]), 0.0);
-      EXPECT_EQ(still(layout.slip_gradient[i]), 0.0);
+      EXPECT_EQ(still(layout.slip_compliance[i]), 0.0);
     }
     // Straight at v: every wheel rolls v dt.
     for (const double v : {0.5, 1.0, -2.0}) {
@@ -307,10 +307,10 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
       for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
         const double distance = std::abs(v) * 0.04;
         const double radius_var = s.rolling_radius_noise_m_per_sqrt_m * s.rolling_radius_noise_m_per_sqrt_m * distance;
-        const double gradient_var =
-            s.slip_gradient_noise_nm_per_sqrt_m * s.slip_gradient_noise_nm_per_sqrt_m * distance;
+        const double compliance_var =
+            s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m * distance;
         EXPECT_NEAR(d(layout.rolling_radius[i]), radius_var, 1e-12 * radius_var);
-        EXPECT_NEAR(d(layout.slip_gradient[i]), gradient_var, 1e-12 * gradient_var);
+        EXPECT_NEAR(d(layout.slip_compliance[i]), compliance_var, 1e-12 * compliance_var);
       }
     }
     // Turning on the spot at r: wheel i rolls |r| |l_i| dt (0 for a wheel at the reference point).
@@ -318,8 +318,8 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
     const Eigen::VectorXd turn = increments(0.0, 0.0, r, dt);
     for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
       const double distance = r * vehicle.wheels[i].position_m.norm() * dt;
-      EXPECT_NEAR(turn(layout.slip_gradient[i]),
-                  s.slip_gradient_noise_nm_per_sqrt_m * s.slip_gradient_noise_nm_per_sqrt_m * distance, 1e-12)
+      EXPECT_NEAR(turn(layout.slip_compliance[i]),
+                  s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m * distance, 1e-12)
           << vehicle.wheels[i].name;
     }
   }

@@ -30,7 +30,7 @@ std::vector<Expected> ShippedVehicles() {
 void ExpectUniqueAndContiguous(const StateLayout& layout) {
   std::vector<int> used;
   for (int i = 0; i < L::kBaseSize; ++i) used.push_back(i);
-  for (const auto* indices : {&layout.steering, &layout.rolling_radius, &layout.slip_gradient}) {
+  for (const auto* indices : {&layout.steering, &layout.rolling_radius, &layout.slip_compliance}) {
     ASSERT_EQ(indices->size(), layout.wheel_count());
     for (int index : *indices) {
       if (index >= 0) used.push_back(index);
@@ -101,9 +101,9 @@ TEST(StateLayout, IndicesAreUniqueAndContiguous) {
       for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
         EXPECT_EQ(layout.steering[i] >= 0, e.vehicle.wheels[i].steerable) << i;
         EXPECT_EQ(layout.rolling_radius[i] >= 0, slip) << i;
-        EXPECT_EQ(layout.slip_gradient[i] >= 0, slip) << i;
+        EXPECT_EQ(layout.slip_compliance[i] >= 0, slip) << i;
         if (slip) {
-          EXPECT_EQ(layout.slip_gradient[i], layout.rolling_radius[i] + 1) << i;
+          EXPECT_EQ(layout.slip_compliance[i], layout.rolling_radius[i] + 1) << i;
         }
       }
     }
@@ -114,11 +114,11 @@ TEST(StateLayout, SteeringStatesFollowTheBaseInWheelOrder) {
   const StateLayout layout = StateLayout::For(mapio::VineyardUgv4wsConfig(), true);
   EXPECT_EQ(layout.steering, (std::vector<int>{9, 10, 11, 12}));
   EXPECT_EQ(layout.rolling_radius, (std::vector<int>{13, 15, 17, 19}));
-  EXPECT_EQ(layout.slip_gradient, (std::vector<int>{14, 16, 18, 20}));
+  EXPECT_EQ(layout.slip_compliance, (std::vector<int>{14, 16, 18, 20}));
   const StateLayout tracked = StateLayout::For(mapio::TrackedVehicleConfig(), true);
   EXPECT_EQ(tracked.steering, (std::vector<int>{-1, -1}));
   EXPECT_EQ(tracked.rolling_radius, (std::vector<int>{9, 11}));
-  EXPECT_EQ(tracked.slip_gradient, (std::vector<int>{10, 12}));
+  EXPECT_EQ(tracked.slip_compliance, (std::vector<int>{10, 12}));
 }
 
 TEST(StateLayout, NamesOfTheSwerveRobot) {
@@ -130,7 +130,7 @@ TEST(StateLayout, NamesOfTheSwerveRobot) {
   EXPECT_EQ(StateLayout::For(swerve, false).Names(swerve), expected);
   for (const char* wheel : {"left_front", "left_rear", "right"}) {
     expected.push_back(std::string("R_") + wheel);
-    expected.push_back(std::string("k_") + wheel);
+    expected.push_back(std::string("kappa_") + wheel);
   }
   EXPECT_EQ(StateLayout::For(swerve, true).Names(swerve), expected);
 }
@@ -151,7 +151,7 @@ TEST(StateLayout, NamesOfEveryVehicleAreUniqueAndNonEmpty) {
         }
         if (slip) {
           EXPECT_EQ(names[static_cast<std::size_t>(layout.rolling_radius[i])], "R_" + wheel);
-          EXPECT_EQ(names[static_cast<std::size_t>(layout.slip_gradient[i])], "k_" + wheel);
+          EXPECT_EQ(names[static_cast<std::size_t>(layout.slip_compliance[i])], "kappa_" + wheel);
         }
       }
     }
@@ -159,7 +159,7 @@ TEST(StateLayout, NamesOfEveryVehicleAreUniqueAndNonEmpty) {
   const mapio::VehicleConfig tracked = mapio::TrackedVehicleConfig();
   const auto names = StateLayout::For(tracked, true).Names(tracked);
   EXPECT_EQ(names[9], "R_left_track");
-  EXPECT_EQ(names[12], "k_right_track");
+  EXPECT_EQ(names[12], "kappa_right_track");
 }
 
 }  // namespace

@@ -381,3 +381,46 @@ TEST(VehicleEkfInput, SteeringAngleThroughPiIsTracked) {
 // that ran (10^6, or 10^5 under a sanitizer, see below) is printed and recorded.
 }  // namespace
 }  // namespace rowloc::localization
+
+namespace rowloc::localization {
+namespace {
+
+// ProjectStates keeps the slip compliance in its domain after every message: kappa >= 0 and
+// kappa mu <= max_model_slip for the last traction coefficient mu = T / (N r) > 0, so the odometer
+// model's 1 - kappa mu never reaches 0. The drive's wheels report torques from braking (mu = -0.5)
+// to beyond the traction limit (mu = 1.5) and speeds from locked to spinning.
+TEST(VehicleEkfWheels, SlipComplianceStaysInItsDomain) {
+  const VehicleConfig v = mapio::DifferentialDriveConfig();
+  Drive d = MakeDrive(v, {}, StraightThenCircle(), 0.0, 3, true);
+  FilterConfig config;
+  config.slip_aware_odometry.slip_compliance_noise_per_sqrt_m = 1.0;  // let the data move kappa far
+  VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> mu(-0.5, 1.5), slip_factor(0.0, 3.0);
+  std::size_t driving_updates = 0;
+  for (SensorMessage& m : d.messages) {
+    if (auto* wheels = std::get_if<WheelsMessage>(&m); wheels != nullptr && wheels->time_s > 5.0) {
+      for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+        (*wheels->torque_nm)[i] = mu(rng) * WheelTractionScaleNm(v, i);
+        wheels->speed_radps[i] *= slip_factor(rng);
+      }
+    }
+    const ProcessResult result = ekf.Process(m);
+    if (!ekf.initialised() || !std::holds_alternative<WheelsMessage>(m)) continue;
+    const auto& wheels = std::get<WheelsMessage>(m);
+    for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+      const double kappa = ekf.state()(ekf.layout().slip_compliance[i]);
+      const double last_mu = (*wheels.torque_nm)[i] / WheelTractionScaleNm(v, i);
+      ASSERT_GE(kappa, 0.0) << wheels.time_s;
+      if (last_mu > 0.0) {
+        ASSERT_LE(kappa * last_mu, config.slip_aware_odometry.max_model_slip * (1 + 1e-12)) << wheels.time_s;
+      }
+      if (last_mu > 0.5 && !result.updates.empty() && result.updates.front().outcome.accepted) ++driving_updates;
+    }
+  }
+  EXPECT_GT(driving_updates, 100u);  // the bound was checked after accepted updates at high traction
+  EXPECT_TRUE(ekf.covariance().allFinite());
+}
+
+}  // namespace
+}  // namespace rowloc::localization

@@ -98,7 +98,7 @@ Eigen::VectorXd RandomState(const StateLayout& layout, std::mt19937& rng) {
   x(L::kVx) = 2.0 * u(rng);
   for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
     if (layout.rolling_radius[i] >= 0) x(layout.rolling_radius[i]) = 0.2 + 0.05 * u(rng);
-    if (layout.slip_gradient[i] >= 0) x(layout.slip_gradient[i]) = 500.0 + 100.0 * u(rng);
+    if (layout.slip_compliance[i] >= 0) x(layout.slip_compliance[i]) = 0.5 + 0.2 * u(rng);
   }
   return x;
 }
@@ -128,7 +128,7 @@ TEST(EstimateWheelSlip, IsSaeSlipOfEveryWheelOnTheNominalRadius) {
 }
 
 TEST(EstimateWheelSlip, IgnoresTheEstimatedRollingRadius) {
-  // At constant torque only R_w (k_s - T) / k_s is observable, so R_w absorbs the slip: the slip
+  // At constant torque only R_w (1 - kappa mu) is observable, so R_w absorbs the slip: the slip
   // estimate must not use it (wheel_slip_estimate.hpp).
   const mapio::VehicleConfig vehicle = mapio::VineyardUgv4wsConfig();
   const StateLayout layout = StateLayout::For(vehicle, true);

@@ -12,7 +12,7 @@
 //   process_noise.accel_bias_mps2_per_sqrt_hz      drives b_ax, b_ay (imu.estimate_accel_bias: the
 //                                                  bias and gravity on a slope that changes as the
 //                                                  vehicle drives)
-//   slip_aware_odometry.*_per_sqrt_m               seed 004: R_w and k_s random walks whose variance
+//   slip_aware_odometry.*_per_sqrt_m               seed 004: R_w and kappa random walks whose variance
 //                                                  grows with the distance the wheel rolled
 // Gates are probabilities p: a measurement of dimension m is rejected when its NIS exceeds the
 // chi-square quantile Q(m, p) (SPEC §6 "chi-square gating of outliers").
@@ -42,15 +42,18 @@ struct ProcessNoise {
   double accel_bias_mps2_per_sqrt_hz = 0.05;
 };
 
-/// Seed 004: rolling radius R_w and torque/slip gradient k_s of every wheel as EKF states.
+/// Seed 004: rolling radius R_w and the torque/slip relation of every wheel as EKF states. The
+/// relation is held as the slip compliance kappa = N r / k_s (slip per unit traction coefficient,
+/// dimensionless; k_s seed 004's torque/slip gradient, N r the wheel's static load times its nominal
+/// radius), not as k_s: see measurement_models.hpp and docs/localization-filter.md §5.2.
 struct SlipAwareOdometryConfig {
   bool enabled = true;
   double rolling_radius_sigma_m = 0.01;             ///< initial sigma of R_w around the nominal radius
-  double slip_gradient_initial_nm = 500.0;          ///< initial k_s (torque per unit slip), > 0
-  double slip_gradient_sigma_nm = 250.0;            ///< its initial sigma
-  double min_slip_gradient_nm = 1.0;                ///< k_s is clamped above max(this, |T| + this)
+  double slip_compliance_initial = 1.0;             ///< initial kappa (slip per unit traction), > 0
+  double slip_compliance_sigma = 1.0;               ///< its initial sigma
+  double max_model_slip = 0.9;                      ///< kappa is clamped so that kappa mu <= this, in (0, 1)
   double rolling_radius_noise_m_per_sqrt_m = 1e-5;  ///< R_w random walk per sqrt(metre rolled)
-  double slip_gradient_noise_nm_per_sqrt_m = 5.0;   ///< k_s random walk per sqrt(metre rolled)
+  double slip_compliance_noise_per_sqrt_m = 0.003;  ///< kappa random walk per sqrt(metre rolled)
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

@@ -12,8 +12,14 @@
 //   v_i   = cos(delta_i) (vx - r l_iy) + sin(delta_i) (vy + r l_ix)   (wheel-centre velocity along
 //                                                                       the wheel heading)
 //   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
-//   h_i   = v_i k_i / (R_i (k_i - T_i))                                (slip-aware, seed 004 eqs. (32)-(37):
-//           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque)
+//   h_i   = v_i / (R_i (1 - kappa_i mu_i)),  mu_i = T_i / (N_i r_i)    (slip-aware, seed 004 eqs. (32)-(37):
+//           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque,
+//           written with the slip compliance kappa = N r / k_s: the modelled slip T / k_s is
+//           kappa mu, mu the traction coefficient, N_i = m g / (wheel count) the static load and
+//           r_i the nominal radius. Same model; the filter holds kappa instead of k_s because h is
+//           linear in kappa at constant torque but not in k_s (d(T/k)/dk = -T/k^2 vanishes for a
+//           stiff prior, which made R_w absorb the slip with a false confidence: docs/
+//           localization-filter.md §5.2); kappa is dimensionless, so one prior fits every vehicle)
 //   with an encoder low-pass filter of time constant tau, v_i is replaced by its value tau earlier,
 //   to first order v_i - tau dv_i/dt, where dv_i/dt = cos(delta_i) (ax + r vy) + sin(delta_i)
 //   (ay - r vx) (the body-frame velocity derivatives of the motion model; yaw acceleration,
@@ -57,6 +63,14 @@ void ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int 
 /// Longitudinal wheel-centre velocity v_i (m/s) of wheel `index` (see the header comment).
 double WheelLongitudinalVelocity(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                  const StateLayout& layout, std::size_t index);
+
+/// Standard gravity (m/s^2), for the static wheel loads.
+inline constexpr double kStandardGravityMps2 = 9.80665;
+
+/// N r of wheel `index` (N m): its static load m g / (wheel count), the vehicle carrying its mass
+/// equally (mapio::VehicleConfig::mass_kg), times its nominal radius. A torque divided by it is
+/// the traction coefficient mu of the slip-aware model.
+double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t index);
 
 /// Rolling radius used for wheel `index`: the state R_i with slip-aware odometry, else nominal.
 double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,

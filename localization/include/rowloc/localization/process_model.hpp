@@ -4,7 +4,7 @@
 // Continuous time, body-frame velocity v_B = (vx, vy), yaw rate r, body acceleration a_B:
 //   X'   = vx cos(phi) - vy sin(phi)        Y' = vx sin(phi) + vy cos(phi)        phi' = r
 //   vx'  = ax + r vy                          vy' = ay - r vx
-//   r', ax', ay', delta_i', b_g', R_w', k_s' = white noise (random walks)
+//   r', ax', ay', delta_i', b_g', R_w', kappa' = white noise (random walks; kappa the slip compliance)
 // Seed 000 writes the velocity step as v_Bx + T (a_Bx - phi_dot v_By); with a_B the IMU's
 // acceleration the body-frame velocity obeys the signs above (SPEC §10 erratum; fixed here).
 // Seed 000's discrete model also uses the step T of its own loop; here every step uses the

@@ -35,12 +35,12 @@ struct StateLayout {
 
   std::vector<int> steering;        ///< per wheel: index of delta, or -1 (not steerable)
   std::vector<int> rolling_radius;  ///< per wheel: index of R_w, or -1 (no slip-aware odometry)
-  std::vector<int> slip_gradient;   ///< per wheel: index of k_s, or -1
+  std::vector<int> slip_compliance;  ///< per wheel: index of kappa (slip per unit traction), or -1
   int accel_bias = -1;              ///< index of b_ax (b_ay follows), or -1 (not estimated)
   int size = kBaseSize;
 
   /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
-  /// a rolling radius and a torque/slip gradient per wheel (or track).
+  /// a rolling radius and a slip compliance per wheel (or track).
   /// With accel_bias, two accelerometer-bias states at the end.
   static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false);
 

@@ -141,7 +141,8 @@ class VehicleEkf {
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
-  /// [0.5, 1.5] x nominal; k_s above max(T, 0) + min_slip_gradient_nm (so k_s - T > 0).
+  /// [0.5, 1.5] x nominal; the slip compliance kappa in [0, max_model_slip / mu] for the last
+  /// traction coefficient mu > 0 (so that 1 - kappa mu > 0), kappa >= 0 otherwise.
   void ProjectStates();
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);

@@ -5,7 +5,7 @@
 // steering angle (measurement_models.hpp), omega the *raw* encoder speed (not the filter's
 // prediction), R the nominal wheel radius of the vehicle file (seed 000 ch. 7 uses the wheel radius:
 // not the slip-aware state R_w, which at constant torque absorbs the slip itself, since only
-// R_w (k_s - T) / k_s is observable then; a terrain's rolling radius R_a below the nominal R_m
+// R_w (1 - kappa mu) = R_w (k_s - T) / k_s is observable then; a terrain's rolling radius R_a below the nominal R_m
 // therefore reads as extra slip, s_a - s_m = (1 - s_a) (R_a / R_m - 1), seed 004 eq. (29); see
 // docs/localization-filter.md §4); s = 0 when both |omega R| and |v_long| are below 0.05 m/s; saturated to [-1, 1] (speeds
 // of opposite signs would give up to 2 in magnitude).
