@@ -102,7 +102,7 @@ FilterConfig ReadConfig(Reader& root) {
     c.slip_aware_odometry = {s.Bool("enabled"), s.Number("rolling_radius_sigma_m"),
                              s.Number("slip_compliance_initial"), s.Number("slip_compliance_sigma"),
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
-                             s.Number("slip_compliance_noise_per_sqrt_m")};
+                             s.Number("slip_compliance_noise_per_sqrt_m"), s.Bool("traction_from_acceleration")};
     s.RejectUnknownKeys();
   }
   {

@@ -27,6 +27,12 @@ struct WheelCentre {
   double lateral() const { return -s * along_x + c * along_y; }
 };
 
+/// The traction coefficient the body acceleration demands of a wheel: its acceleration along the
+/// wheel over g (WheelTractionCoefficient).
+double TractionFromAcceleration(const Eigen::VectorXd& x, const WheelCentre& w) {
+  return (w.c * x(L::kAx) + w.s * x(L::kAy)) / kStandardGravityMps2;
+}
+
 WheelCentre CentreOf(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                      std::size_t i) {
   const Eigen::Vector2d& l = vehicle.wheels[i].position_m;
@@ -79,9 +85,18 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
   return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
 }
 
+double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
+                                std::size_t i, const std::optional<std::vector<double>>& torque_nm,
+                                bool from_acceleration) {
+  if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
+  if (!from_acceleration) return 0.0;
+  const WheelCentre w = CentreOf(x, vehicle, layout, i);
+  return TractionFromAcceleration(x, w);
+}
+
 void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s,
-                     LinearizedMeasurement& m) {
+                     bool traction_from_acceleration, LinearizedMeasurement& m) {
   const std::size_t n = vehicle.wheels.size();
   if (torque_nm && torque_nm->size() != n) throw std::invalid_argument("wheel model: one torque per wheel");
   if (!(std::isfinite(encoder_lag_s) && encoder_lag_s >= 0.0)) {
@@ -97,13 +112,17 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     const double c = w.c, s = w.s;
     const double v = w.longitudinal() - tau * (c * ax + s * ay);  // the speed the encoder reports
     const double radius = WheelRollingRadius(x, vehicle, layout, i);
-    double gain = 1.0;  // 1 / (1 - kappa mu) = k_s / (k_s - T)
+    double gain = 1.0;      // 1 / (1 - kappa mu) = k_s / (k_s - T)
+    double dh_dmu = 0.0;    // of a traction from the acceleration (0 with torques)
     if (layout.slip_aware()) {
       const double kappa = x(layout.slip_compliance[i]);
-      const double mu = torque_nm ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i) : 0.0;
+      const double mu = torque_nm                    ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i)
+                        : traction_from_acceleration ? TractionFromAcceleration(x, w)
+                                                     : 0.0;
       gain = 1.0 / (1.0 - kappa * mu);
       m.jacobian(row, layout.slip_compliance[i]) = v / radius * mu * gain * gain;
       m.jacobian(row, layout.rolling_radius[i]) = -v * gain / (radius * radius);
+      if (!torque_nm && traction_from_acceleration) dh_dmu = v / radius * kappa * gain * gain;
     }
     const double dv = gain / radius;  // d h / d v
     m.predicted(row) = v * dv;
@@ -116,6 +135,12 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     }
     if (layout.steering[i] >= 0) {  // d v / d delta
       m.jacobian(row, layout.steering[i]) = dv * (w.lateral() - tau * (-s * ax + c * ay));
+    }
+    if (dh_dmu != 0.0) {  // mu = (c a_x + s a_y) / g
+      const double g = kStandardGravityMps2;
+      m.jacobian(row, L::kAx) += dh_dmu * c / g;
+      m.jacobian(row, L::kAy) += dh_dmu * s / g;
+      if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) += dh_dmu * (-s * x(L::kAx) + c * x(L::kAy)) / g;
     }
   }
 }
@@ -174,9 +199,10 @@ LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& 
 
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
-                                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s) {
+                                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s,
+                                      bool traction_from_acceleration) {
   LinearizedMeasurement m;
-  WheelSpeedModel(x, vehicle, layout, torque_nm, encoder_lag_s, m);
+  WheelSpeedModel(x, vehicle, layout, torque_nm, encoder_lag_s, traction_from_acceleration, m);
   return m;
 }
 

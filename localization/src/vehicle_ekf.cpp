@@ -175,13 +175,15 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
     last_speed_radps_[wheel_index_[j]] = wheels.speed_radps[j];
     if (wheels.torque_nm) last_torque_nm_[wheel_index_[j]] = (*wheels.torque_nm)[j];
   }
+  last_torque_measured_ = wheels.torque_nm.has_value();
   ProcessResult result;
   if (!initialised_) return result;
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
   ProjectStates();  // kappa mu <= max_model_slip for the new torque before linearizing 1 / (1 - kappa mu)
   UpdateBuffers& b = update_buffers_;
-  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s, b.wheels);
+  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s,
+                  config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
   const auto m = static_cast<Eigen::Index>(n);
   const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
   const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
@@ -254,16 +256,17 @@ void VehicleEkf::ProjectStates() {
     if (d >= 0) x_(d) = WrapAngle(x_(d));
   }
   if (!layout_.slip_aware()) return;
-  const double max_slip = config_.slip_aware_odometry.max_model_slip;
+  const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
+  std::optional<std::vector<double>> torque;
+  if (last_torque_measured_) torque = last_torque_nm_;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;
     double& radius = x_(layout_.rolling_radius[i]);
     radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
-    const double torque = last_torque_nm_.empty() ? 0.0 : last_torque_nm_[i];
-    const double mu = torque / WheelTractionScaleNm(vehicle_, i);
+    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, torque, slip.traction_from_acceleration);
     double& kappa = x_(layout_.slip_compliance[i]);
     kappa = std::max(kappa, 0.0);
-    if (mu > 0.0) kappa = std::min(kappa, max_slip / mu);
+    if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);
   }
 }
 

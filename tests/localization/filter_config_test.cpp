@@ -47,6 +47,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.max_model_slip, sb.max_model_slip);
   EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
+  EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
   const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
   EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
   EXPECT_EQ(ia.heading_sigma_rad, ib.heading_sigma_rad);
@@ -169,7 +170,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 52u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 53u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());

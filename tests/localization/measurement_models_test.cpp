@@ -108,6 +108,12 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
             [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, torques, 0.05); }, x,
             "wheels with torque and encoder lag");
         ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt, 0.0, true); }, x,
+            "wheels with the traction from the acceleration");
+        ExpectJacobianMatchesNumeric(
+            [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt, 0.05, true); }, x,
+            "wheels with the traction from the acceleration and encoder lag");
+        ExpectJacobianMatchesNumeric(
             [&](const Eigen::VectorXd& s) { return WheelLateralVelocityModel(s, vehicle, layout); }, x, "lateral");
         if (!steerable.empty()) {
           ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return SteeringModel(s, layout, steerable); },
@@ -159,7 +165,7 @@ TEST(MeasurementModels, OutParameterFormsOverwriteAReusedBuffer) {
     LinearizedMeasurement out;
     out.predicted = Eigen::VectorXd::Constant(7, 9.0);  // stale content of another size
     out.jacobian = Eigen::MatrixXd::Constant(7, x.size(), 9.0);
-    WheelSpeedModel(x, v, layout, torque, 0.02, out);
+    WheelSpeedModel(x, v, layout, torque, 0.02, false, out);
     EXPECT_TRUE(same(out, WheelSpeedModel(x, v, layout, torque, 0.02))) << v.name;
     WheelLateralVelocityModel(x, v, layout, out);
     EXPECT_TRUE(same(out, WheelLateralVelocityModel(x, v, layout))) << v.name;
@@ -313,6 +319,42 @@ TEST(WheelSpeedModel, SlipAwareOdometerFollowsSeed004) {
         }
       }
     }
+  }
+}
+
+// Without torques, traction_from_acceleration takes mu = (cos(delta) a_x + sin(delta) a_y) / g:
+// braking (mu < 0) lowers the predicted encoder speed, speeding up raises it; torques, when given,
+// win, and a filter without slip states ignores the switch.
+TEST(WheelSpeedModel, TractionFromTheAccelerationWithoutTorque) {
+  std::mt19937 rng(77);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    const StateLayout layout = StateLayout::For(vehicle, true);
+    for (int trial = 0; trial < 20; ++trial) {
+      const Eigen::VectorXd x = RandomState(layout, rng);
+      const std::vector<double> torques(vehicle.wheels.size(), 5.0);
+      const LinearizedMeasurement from_acceleration = WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.0, true);
+      const LinearizedMeasurement zero = WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.0, false);
+      EXPECT_EQ(WheelSpeedModel(x, vehicle, layout, torques, 0.0, true).predicted,
+                WheelSpeedModel(x, vehicle, layout, torques, 0.0, false).predicted);
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        const auto row = static_cast<Eigen::Index>(i);
+        const double delta = layout.steering[i] >= 0 ? x(layout.steering[i]) : 0.0;
+        const double mu = (std::cos(delta) * x(L::kAx) + std::sin(delta) * x(L::kAy)) / 9.80665;
+        EXPECT_NEAR(WheelTractionCoefficient(x, vehicle, layout, i, std::nullopt, true), mu, 1e-15);
+        EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, std::nullopt, false), 0.0);
+        EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, torques, true), 5.0 / WheelTractionScaleNm(vehicle, i));
+        const double kappa = x(layout.slip_compliance[i]);
+        EXPECT_NEAR(from_acceleration.predicted(row), zero.predicted(row) / (1.0 - kappa * mu),
+                    1e-12 * std::abs(zero.predicted(row)) + 1e-15);
+        if (std::abs(zero.predicted(row)) > 1e-3 && std::abs(mu) > 1e-3) {  // |omega| grows with mu
+          EXPECT_EQ(std::abs(from_acceleration.predicted(row)) > std::abs(zero.predicted(row)), mu > 0.0);
+        }
+      }
+    }
+    const StateLayout plain = StateLayout::For(vehicle, false);
+    const Eigen::VectorXd x = RandomState(plain, rng);
+    EXPECT_EQ(WheelSpeedModel(x, vehicle, plain, std::nullopt, 0.0, true).predicted,
+              WheelSpeedModel(x, vehicle, plain, std::nullopt, 0.0, false).predicted);
   }
 }
 

@@ -54,6 +54,9 @@ struct SlipAwareOdometryConfig {
   double max_model_slip = 0.9;                      ///< kappa is clamped so that kappa mu <= this, in (0, 1)
   double rolling_radius_noise_m_per_sqrt_m = 1e-5;  ///< R_w random walk per sqrt(metre rolled)
   double slip_compliance_noise_per_sqrt_m = 0.003;  ///< kappa random walk per sqrt(metre rolled)
+  /// Wheels messages without torques: the traction coefficient from the acceleration state
+  /// (measurement_models.hpp) instead of 0.
+  bool traction_from_acceleration = true;
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

@@ -19,7 +19,11 @@
 //           r_i the nominal radius. Same model; the filter holds kappa instead of k_s because h is
 //           linear in kappa at constant torque but not in k_s (d(T/k)/dk = -T/k^2 vanishes for a
 //           stiff prior, which made R_w absorb the slip with a false confidence: docs/
-//           localization-filter.md §5.2); kappa is dimensionless, so one prior fits every vehicle)
+//           localization-filter.md §5.2); kappa is dimensionless, so one prior fits every vehicle.
+//           A message without torques has mu_i = 0, or (traction_from_acceleration) the part the
+//           acceleration demands, mu_i = (cos(delta_i) a_x + sin(delta_i) a_y) / g: then R_i absorbs
+//           the constant rolling-resistance part and kappa_i mu_i models the slip change when the
+//           vehicle speeds up or brakes (docs/localization-filter.md §5.3))
 //   with an encoder low-pass filter of time constant tau, v_i is replaced by its value tau earlier,
 //   to first order v_i - tau dv_i/dt, where dv_i/dt = cos(delta_i) (ax + r vy) + sin(delta_i)
 //   (ay - r vx) (the body-frame velocity derivatives of the motion model; yaw acceleration,
@@ -72,21 +76,30 @@ inline constexpr double kStandardGravityMps2 = 9.80665;
 /// the traction coefficient mu of the slip-aware model.
 double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t index);
 
+/// Traction coefficient mu of wheel `index` in the slip-aware odometer model: with torques,
+/// T / (N r) (WheelTractionScaleNm); without, if from_acceleration, the part the body acceleration
+/// demands, (cos(delta) a_x + sin(delta) a_y) / g (the wheels carry the mass equally; the
+/// rolling-resistance part is constant on one terrain and R_w absorbs it), else 0.
+double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
+                                std::size_t index, const std::optional<std::vector<double>>& torque_nm,
+                                bool from_acceleration);
+
 /// Rolling radius used for wheel `index`: the state R_i with slip-aware odometry, else nominal.
 double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                           const StateLayout& layout, std::size_t index);
 
 /// All wheels in vehicle order (rad/s). torque_nm: one per wheel, used by the slip-aware model
-/// only (absent: T = 0, the odometer model reduces to v / R). encoder_lag_s: the encoders'
-/// low-pass time constant tau (>= 0; 0: none). Throws std::invalid_argument for a torque count
-/// other than the wheel count or a negative or non-finite lag.
+/// only; without it the traction coefficient is 0 (the odometer model reduces to v / R) or, with
+/// traction_from_acceleration, the acceleration's (WheelTractionCoefficient). encoder_lag_s: the
+/// encoders' low-pass time constant tau (>= 0; 0: none). Throws std::invalid_argument for a torque
+/// count other than the wheel count or a negative or non-finite lag.
 LinearizedMeasurement WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                       const StateLayout& layout,
                                       const std::optional<std::vector<double>>& torque_nm,
-                                      double encoder_lag_s = 0.0);
+                                      double encoder_lag_s = 0.0, bool traction_from_acceleration = false);
 void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                      const std::optional<std::vector<double>>& torque_nm, double encoder_lag_s,
-                     LinearizedMeasurement& out);
+                     bool traction_from_acceleration, LinearizedMeasurement& out);
 
 /// Lateral wheel-centre velocities of all wheels (vehicle order), m/s (the non-holonomic rows).
 LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,

@@ -141,8 +141,9 @@ class VehicleEkf {
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
-  /// [0.5, 1.5] x nominal; the slip compliance kappa in [0, max_model_slip / mu] for the last
-  /// traction coefficient mu > 0 (so that 1 - kappa mu > 0), kappa >= 0 otherwise.
+  /// [0.5, 1.5] x nominal; the slip compliance kappa in [0, max_model_slip / mu] for the traction
+  /// coefficient mu > 0 of the last wheels message (its torques, or the acceleration state: see
+  /// WheelTractionCoefficient), so that 1 - kappa mu > 0; kappa >= 0 otherwise.
   void ProjectStates();
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
@@ -164,6 +165,7 @@ class VehicleEkf {
   std::optional<Eigen::Vector2d> anchor_enu_;  ///< first antenna fix while waiting for the heading
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
   std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
+  bool last_torque_measured_ = false;          ///< the last wheels message carried torques
   std::vector<std::optional<double>> last_steering_rad_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
   /// Reused by every echo: scratch, and the cache of R-tree results, which changes no result.
