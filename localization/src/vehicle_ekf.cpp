@@ -180,7 +180,7 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   if (!initialised_) return result;
   std::optional<std::vector<double>> torque;
   if (wheels.torque_nm) torque = last_torque_nm_;
-  ProjectStates();  // kappa mu <= max_model_slip for the new torque before linearizing 1 / (1 - kappa mu)
+  ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
   UpdateBuffers& b = update_buffers_;
   WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s,
                   config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
@@ -250,20 +250,23 @@ std::vector<double> VehicleEkf::WheelSlip() const {
   return EstimateWheelSlip(x_, vehicle_, layout_, last_speed_radps_);
 }
 
-void VehicleEkf::ProjectStates() {
+void VehicleEkf::ProjectStates(bool before_wheel_model) {
   if (!initialised_) return;
   for (const int d : layout_.steering) {
     if (d >= 0) x_(d) = WrapAngle(x_(d));
   }
   if (!layout_.slip_aware()) return;
   const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
-  std::optional<std::vector<double>> torque;
-  if (last_torque_measured_) torque = last_torque_nm_;
+  // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
+  // model linearizes 1 / (1 - kappa mu): checked there, not after every message.
+  const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration && !last_torque_measured_;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;
     double& radius = x_(layout_.rolling_radius[i]);
     radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
-    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, torque, slip.traction_from_acceleration);
+    const double mu = last_torque_measured_ ? last_torque_nm_[i] / WheelTractionScaleNm(vehicle_, i)
+                      : from_acceleration  ? WheelTractionCoefficient(x_, vehicle_, layout_, i, std::nullopt, true)
+                                           : 0.0;
     double& kappa = x_(layout_.slip_compliance[i]);
     kappa = std::max(kappa, 0.0);
     if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);

@@ -141,10 +141,11 @@ class VehicleEkf {
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
-  /// [0.5, 1.5] x nominal; the slip compliance kappa in [0, max_model_slip / mu] for the traction
-  /// coefficient mu > 0 of the last wheels message (its torques, or the acceleration state: see
-  /// WheelTractionCoefficient), so that 1 - kappa mu > 0; kappa >= 0 otherwise.
-  void ProjectStates();
+  /// [0.5, 1.5] x nominal; the slip compliance kappa >= 0 and, for a traction coefficient mu > 0,
+  /// kappa mu <= max_model_slip (so that 1 - kappa mu > 0). mu: the last wheels message's torques;
+  /// without torques, with before_wheel_model and traction_from_acceleration, the acceleration's
+  /// (WheelTractionCoefficient); else none.
+  void ProjectStates(bool before_wheel_model = false);
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
 
