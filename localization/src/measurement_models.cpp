@@ -88,6 +88,10 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
 double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                                 std::size_t i, const std::optional<std::vector<double>>& torque_nm,
                                 bool from_acceleration) {
+  if (i >= vehicle.wheels.size()) throw std::invalid_argument("traction coefficient: no such wheel");
+  if (torque_nm && torque_nm->size() != vehicle.wheels.size()) {
+    throw std::invalid_argument("traction coefficient: one torque per wheel");
+  }
   if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
   if (!from_acceleration) return 0.0;
   const WheelCentre w = CentreOf(x, vehicle, layout, i);

@@ -351,6 +351,11 @@ TEST(WheelSpeedModel, TractionFromTheAccelerationWithoutTorque) {
         }
       }
     }
+    const Eigen::VectorXd any = RandomState(layout, rng);
+    const std::size_t n = vehicle.wheels.size();
+    EXPECT_THROW(WheelTractionCoefficient(any, vehicle, layout, n, std::nullopt, true), std::invalid_argument);
+    EXPECT_THROW(WheelTractionCoefficient(any, vehicle, layout, 0, std::vector<double>(n + 1, 1.0), true),
+                 std::invalid_argument);
     const StateLayout plain = StateLayout::For(vehicle, false);
     const Eigen::VectorXd x = RandomState(plain, rng);
     EXPECT_EQ(WheelSpeedModel(x, vehicle, plain, std::nullopt, 0.0, true).predicted,

@@ -79,7 +79,8 @@ double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t ind
 /// Traction coefficient mu of wheel `index` in the slip-aware odometer model: with torques,
 /// T / (N r) (WheelTractionScaleNm); without, if from_acceleration, the part the body acceleration
 /// demands, (cos(delta) a_x + sin(delta) a_y) / g (the wheels carry the mass equally; the
-/// rolling-resistance part is constant on one terrain and R_w absorbs it), else 0.
+/// rolling-resistance part is constant on one terrain and R_w absorbs it), else 0. Throws
+/// std::invalid_argument for an index beyond the wheels or a torque count other than the wheel count.
 double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                                 std::size_t index, const std::optional<std::vector<double>>& torque_nm,
                                 bool from_acceleration);
