@@ -16,10 +16,11 @@
 //           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque,
 //           written with the slip compliance kappa = N r / k_s: the modelled slip T / k_s is
 //           kappa mu, mu the traction coefficient, N_i = m g / (wheel count) the static load and
-//           r_i the nominal radius. Same model; the filter holds kappa instead of k_s because h is
-//           linear in kappa at constant torque but not in k_s (d(T/k)/dk = -T/k^2 vanishes for a
-//           stiff prior, which made R_w absorb the slip with a false confidence: docs/
-//           localization-filter.md §5.2); kappa is dimensionless, so one prior fits every vehicle.
+//           r_i the nominal radius. Same model; the filter holds kappa instead of k_s because the
+//           modelled slip kappa mu is linear in kappa, while T / k_s is not in k_s: its derivative
+//           -T/k^2 vanishes for a stiff prior, which made R_w absorb the slip with a false
+//           confidence (docs/localization-filter.md §5.2); kappa is dimensionless, so one prior
+//           fits every vehicle.
 //           A message without torques has mu_i = 0, or (traction_from_acceleration) the part the
 //           acceleration demands, mu_i = (cos(delta_i) a_x + sin(delta_i) a_y) / g: then R_i absorbs
 //           the constant rolling-resistance part and kappa_i mu_i models the slip change when the
