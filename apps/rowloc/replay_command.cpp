@@ -2,7 +2,8 @@
 //  [--no-updates] [--skip TYPE ...]`: runs the vehicle EKF (rowloc/localization/vehicle_ekf.hpp) over a sensor log
 // (docs/protocol.md §1) and writes the estimate stream (§3): estimate lines with the (x, y, phi)
 // covariance and the per-wheel slip every --period seconds of log time (SAE slip from the filter;
-// for skid-steer vehicles the track slip i = 1 - eta of the adaptive observer of seed 001), and one
+// for skid-steer vehicles the track slip i = 1 - eta of the adaptive observer of seed 001) and,
+// with slip-aware odometry, each wheel's calibration states R_w and kappa with their sigmas, and one
 // update line per measurement update. With --map (a GeoJSON row map, docs/map-format.md) the
 // ultrasonic echoes update the filter against the rows (map-aided update, issue 5; the method is the
 // filter file's map_aided.method) and the summary counts what happened to every echo; --echo-log
@@ -98,12 +99,28 @@ class TrackSlipTap {
   std::size_t right_ = 0;
 };
 
+/// R_w and kappa of every wheel with their standard deviations (empty without slip-aware odometry).
+std::vector<sim::WheelCalibrationRecord> CalibrationOf(const localization::VehicleEkf& ekf) {
+  const localization::StateLayout& layout = ekf.layout();
+  if (!layout.slip_aware()) return {};
+  const Eigen::VectorXd& x = ekf.state();
+  const Eigen::MatrixXd& p = ekf.covariance();
+  std::vector<sim::WheelCalibrationRecord> wheels;
+  for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
+    const int r = layout.rolling_radius[i], k = layout.slip_compliance[i];
+    wheels.push_back({ekf.vehicle().wheels[i].name, x(r), std::sqrt(std::max(p(r, r), 0.0)), x(k),
+                      std::sqrt(std::max(p(k, k), 0.0))});
+  }
+  return wheels;
+}
+
 sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf, const TrackSlipTap& tracks) {
   sim::EstimateRecord record;
   record.time_s = ekf.time_s();
   record.position_m = ekf.state().head<2>();
   record.heading_rad = ekf.state()(localization::StateLayout::kPhi);
   record.covariance = ekf.covariance().topLeftCorner<3, 3>();
+  record.wheel_calibration = CalibrationOf(ekf);
   if (tracks.active()) {
     record.slip = tracks.Slip(ekf.vehicle());
     return record;

@@ -83,6 +83,27 @@ void CheckTimeOrder(const char* type, double time_s, double& last_time_s) {
   }
 }
 
+/// `wheel_calibration`: {wheel: {rolling_radius_m, rolling_radius_sigma_m, slip_compliance,
+/// slip_compliance_sigma}}; unique non-empty names, finite values, R_w > 0, kappa and sigmas >= 0.
+ordered_json CalibrationJson(const char* type, const std::vector<WheelCalibrationRecord>& wheels) {
+  ordered_json out = ordered_json::object();
+  for (const WheelCalibrationRecord& w : wheels) {
+    if (w.wheel.empty() || out.contains(w.wheel)) Refuse(type, "wheel_calibration names must be unique and non-empty");
+    const double radius = Finite(type, "rolling_radius_m", w.rolling_radius_m);
+    const double radius_sigma = Finite(type, "rolling_radius_sigma_m", w.rolling_radius_sigma_m);
+    const double kappa = Finite(type, "slip_compliance", w.slip_compliance);
+    const double kappa_sigma = Finite(type, "slip_compliance_sigma", w.slip_compliance_sigma);
+    if (radius <= 0.0 || radius_sigma < 0.0 || kappa < 0.0 || kappa_sigma < 0.0) {
+      Refuse(type, "wheel_calibration of '" + w.wheel + "': radius must be > 0, compliance and sigmas >= 0");
+    }
+    out[w.wheel] = {{"rolling_radius_m", radius},
+                    {"rolling_radius_sigma_m", radius_sigma},
+                    {"slip_compliance", kappa},
+                    {"slip_compliance_sigma", kappa_sigma}};
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string_view GnssFixQualityName(GnssFixQuality fix) {
@@ -287,6 +308,7 @@ void EstimateLogWriter::Write(const EstimateRecord& r) {
     }
     j["slip"] = slip;
   }
+  if (!r.wheel_calibration.empty()) j["wheel_calibration"] = CalibrationJson(type, r.wheel_calibration);
   out_ << j.dump() << '\n';
   if (!out_) throw std::runtime_error("estimate log: write failed");
   last_time_s_ = r.time_s;

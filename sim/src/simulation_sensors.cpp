@@ -54,7 +54,7 @@ void SimulationRun::SampleGnss(double time_s) {
     const Eigen::Vector2d lever = dead_reckoning_ ? Eigen::Rotation2Dd(heading) * antenna.position_m.head<2>()
                                                   : Eigen::Vector2d::Zero();
     gnss_baseline_->Write(EstimateRecord{time_s, sample.position_m.head<2>() - lever, std::nullopt,
-                                         Eigen::Vector3d(variance, variance, 0.0).asDiagonal().toDenseMatrix(), {}});
+                                         Eigen::Vector3d(variance, variance, 0.0).asDiagonal().toDenseMatrix(), {}, {}});
   }
 }
 
@@ -114,7 +114,7 @@ void SimulationRun::SampleWheels(double time_s) {
   ++summary_.wheels;
   if (dead_reckoning_) {
     const PlanarPose pose = dead_reckoning_->AddWheelSpeeds(time_s, readings);
-    odometry_baseline_->Write(EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}});
+    odometry_baseline_->Write(EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}, {}});
   }
 }
 

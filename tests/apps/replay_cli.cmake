@@ -10,6 +10,13 @@ rowloc_cli_test(replay_runs_on_simulated_log ON "initialised at t=.*updates gnss
 rowloc_cli_reproducible_test(replay_is_deterministic ${_replay_out}/tiles-b.ndjson ${_replay_out}/tiles-a.ndjson
                              replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
                              --filter ${PROJECT_SOURCE_DIR}/config/filters/default.json -o ${_replay_out}/tiles-b.ndjson)
+# With slip-aware odometry every estimate carries the wheels' calibration states (docs/protocol.md §3).
+add_test(NAME apps.replay_writes_wheel_calibration
+         COMMAND ${CMAKE_COMMAND} -DFILE=${_replay_out}/tiles-a.ndjson
+                 "-DPATTERN=\"wheel_calibration\":{\"left_front\":{\"rolling_radius_m\":0\\.1[0-9]+,\"rolling_radius_sigma_m\":[0-9.e-]+,\"slip_compliance\":[0-9.e-]+,\"slip_compliance_sigma\":"
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/file_contains.cmake)
+set_tests_properties(apps.replay_writes_wheel_calibration PROPERTIES LABELS apps
+                     FIXTURES_REQUIRED "simulate_tiles;replay_tiles")
 rowloc_cli_test(replay_output_evaluates ON "position, total \\[m\\] +[0-9]+ +0\\.0[0-4]"
                 evaluate ${_sim_out}/tiles-a/truth.ndjson ${_replay_out}/tiles-a.ndjson --clip-to-truth
                 -o ${_replay_out}/tiles-a-report --no-plots)

@@ -243,6 +243,42 @@ TEST(EstimateLogWriter, SlipAndUpdateLinesRoundTripThroughTheReader) {
   EXPECT_DOUBLE_EQ(stream.estimates[0].wheel_slip.at("right"), -0.05);
 }
 
+TEST(EstimateLogWriter, WheelCalibrationIsWrittenPerWheelAndBadValuesAreRefused) {
+  std::ostringstream out;
+  EstimateLogWriter writer(out, "test", "diff", geometry::GeoOrigin{});
+  EstimateRecord r;
+  r.time_s = 1.0;
+  r.wheel_calibration = {{"left", 0.16, 0.002, 1.1, 0.3}, {"right", 0.17, 0.003, 0.9, 0.2}};
+  writer.Write(r);
+  const std::vector<json> lines = Lines(out.str());
+  ASSERT_EQ(lines.size(), 2u);
+  const json& c = lines[1].at("wheel_calibration");
+  EXPECT_EQ(c.size(), 2u);
+  EXPECT_EQ(c.at("left").at("rolling_radius_m").get<double>(), 0.16);
+  EXPECT_EQ(c.at("left").at("rolling_radius_sigma_m").get<double>(), 0.002);
+  EXPECT_EQ(c.at("right").at("slip_compliance").get<double>(), 0.9);
+  EXPECT_EQ(c.at("right").at("slip_compliance_sigma").get<double>(), 0.2);
+  std::istringstream in(out.str());
+  EXPECT_EQ(ParseEstimateStream(in, "written").estimates.size(), 1u);  // readers skip the key
+  const std::string written = out.str();
+  const auto refused = [&](WheelCalibrationRecord w) {
+    EstimateRecord bad = r;
+    bad.time_s = 2.0;
+    bad.wheel_calibration = {w};
+    EXPECT_THROW(writer.Write(bad), std::invalid_argument) << w.wheel;
+  };
+  refused({"", 0.16, 0.0, 1.0, 0.0});
+  refused({"left", 0.0, 0.0, 1.0, 0.0});
+  refused({"left", 0.16, -0.001, 1.0, 0.0});
+  refused({"left", 0.16, 0.0, -0.1, 0.0});
+  refused({"left", 0.16, 0.0, 1.0, std::numeric_limits<double>::quiet_NaN()});
+  EstimateRecord twice = r;
+  twice.time_s = 2.0;
+  twice.wheel_calibration = {{"left", 0.16, 0.0, 1.0, 0.0}, {"left", 0.16, 0.0, 1.0, 0.0}};
+  EXPECT_THROW(writer.Write(twice), std::invalid_argument);
+  EXPECT_EQ(out.str(), written);
+}
+
 TEST(EstimateLogWriter, RefusesBadUpdatesAndSlipAndWritesNothingForThem) {
   std::ostringstream out;
   EstimateLogWriter writer(out, "test", "diff", geometry::GeoOrigin{});

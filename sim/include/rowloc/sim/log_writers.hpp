@@ -138,6 +138,16 @@ class TruthLogWriter {
   std::size_t records_ = 0;
 };
 
+/// The slip-aware odometry's calibration states of one wheel (docs/protocol.md §3
+/// `wheel_calibration`): rolling radius R_w and slip compliance kappa with their standard deviations.
+struct WheelCalibrationRecord {
+  std::string wheel;
+  double rolling_radius_m = 0.0;        ///< > 0
+  double rolling_radius_sigma_m = 0.0;  ///< >= 0
+  double slip_compliance = 0.0;         ///< kappa, slip per unit traction coefficient, >= 0
+  double slip_compliance_sigma = 0.0;   ///< >= 0
+};
+
 struct EstimateRecord {
   double time_s = 0.0;
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
@@ -146,6 +156,8 @@ struct EstimateRecord {
   std::optional<Eigen::Matrix3d> covariance;
   /// Estimated slip per wheel name (SAE slip, or track slip i), written as `slip` when not empty.
   std::vector<std::pair<std::string, double>> slip;
+  /// Calibration states per wheel, written as `wheel_calibration` when not empty.
+  std::vector<WheelCalibrationRecord> wheel_calibration;
 };
 
 /// One measurement update (docs/protocol.md §3 `update` line).
