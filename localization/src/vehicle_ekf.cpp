@@ -170,19 +170,20 @@ ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
 ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   const std::size_t n = vehicle_.wheels.size();
   last_speed_radps_.assign(n, 0.0);
-  last_torque_nm_.assign(n, 0.0);
+  if (wheels.torque_nm) {
+    if (!last_torque_nm_) last_torque_nm_.emplace(n, 0.0);
+  } else {
+    last_torque_nm_.reset();
+  }
   for (std::size_t j = 0; j < n; ++j) {
     last_speed_radps_[wheel_index_[j]] = wheels.speed_radps[j];
-    if (wheels.torque_nm) last_torque_nm_[wheel_index_[j]] = (*wheels.torque_nm)[j];
+    if (wheels.torque_nm) (*last_torque_nm_)[wheel_index_[j]] = (*wheels.torque_nm)[j];
   }
-  last_torque_measured_ = wheels.torque_nm.has_value();
   ProcessResult result;
   if (!initialised_) return result;
-  std::optional<std::vector<double>> torque;
-  if (wheels.torque_nm) torque = last_torque_nm_;
   ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
   UpdateBuffers& b = update_buffers_;
-  WheelSpeedModel(x_, vehicle_, layout_, torque, config_.wheels.encoder_low_pass_time_constant_s,
+  WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
                   config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
   const auto m = static_cast<Eigen::Index>(n);
   const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
@@ -259,14 +260,12 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
   const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
   // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
   // model linearizes 1 / (1 - kappa mu): checked there, not after every message.
-  const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration && !last_torque_measured_;
+  const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;
     double& radius = x_(layout_.rolling_radius[i]);
     radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
-    const double mu = last_torque_measured_ ? last_torque_nm_[i] / WheelTractionScaleNm(vehicle_, i)
-                      : from_acceleration  ? WheelTractionCoefficient(x_, vehicle_, layout_, i, std::nullopt, true)
-                                           : 0.0;
+    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
     double& kappa = x_(layout_.slip_compliance[i]);
     kappa = std::max(kappa, 0.0);
     if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);

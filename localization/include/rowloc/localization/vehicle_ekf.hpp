@@ -165,8 +165,8 @@ class VehicleEkf {
   std::optional<double> gps_gated_since_s_;   ///< first gated fix since the last accepted one
   std::optional<Eigen::Vector2d> anchor_enu_;  ///< first antenna fix while waiting for the heading
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
-  std::vector<double> last_torque_nm_;         ///< vehicle order (0 without torque sensing)
-  bool last_torque_measured_ = false;          ///< the last wheels message carried torques
+  /// The last wheels message's torques, vehicle order; none when it carried none.
+  std::optional<std::vector<double>> last_torque_nm_;
   std::vector<std::optional<double>> last_steering_rad_;
   std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
   /// Reused by every echo: scratch, and the cache of R-tree results, which changes no result.
