@@ -114,7 +114,7 @@ void RunEvaluate(const EvaluateOptions& o) {
 void RegisterEvaluateCommand(CLI::App& app) {
   auto o = std::make_shared<EvaluateOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "evaluate", "Compare estimates with the ground truth: error, NEES/NIS, whiteness, drift, slip (report + plots)");
+      "evaluate", "Compare estimates with the ground truth: error, NEES/NIS, whiteness, drift, slip, rolling radius (report + plots)");
   cmd->add_option("truth", o->truth_path, "Ground-truth stream (NDJSON, docs/protocol.md §2)")->required();
   cmd->add_option("estimates", o->estimates_path, "Estimate stream (NDJSON, docs/protocol.md §3)")->required();
   cmd->add_option("-o,--output", o->output_dir, "Report directory (report.txt, report.json, plots/)")->required();

@@ -172,6 +172,36 @@ std::string SlipSection(const EvaluationResult& r) {
   return "Slip error per wheel (estimate - truth, SAE slip)\n" + t.Format();
 }
 
+std::string RollingRadiusSection(const EvaluationResult& r) {
+  if (r.rolling_radius.empty()) {
+    return "Rolling radius: not reported (no wheel has a wheel_calibration and a truth rolling_radius_m)\n";
+  }
+  TextTable t({"wheel", "count", "mean [mm]", "std [mm]", "rms [mm]", "max [mm]", "mean NEES", "95 % band of mean",
+               "inside", "final R_w +- sigma [m]", "truth [m]"});
+  for (const RollingRadiusError& w : r.rolling_radius) {
+    std::vector<std::string> row = StatsRow(w.wheel, w.error_m, 1000.0, 2);
+    const bool has_nees = w.nees.count > 0;
+    row.push_back(has_nees ? Num(w.nees.mean, 3) : "-");
+    row.push_back(has_nees ? Band(w.nees.band, 3) : "-");
+    row.push_back(has_nees ? (w.nees.mean_inside ? "yes" : "NO") : "-");
+    row.push_back(Num(w.final_estimate_m, 5) + " +- " + Num(w.final_sigma_m, 5));
+    row.push_back(Num(w.final_truth_m, 5));
+    t.Add(std::move(row));
+  }
+  TextTable correlated(CorrelatedHeader("wheel"));
+  for (const RollingRadiusError& w : r.rolling_radius) {
+    if (w.nees.count > 0) correlated.Add(CorrelatedRow(w.wheel, w.nees));
+  }
+  std::string out = "Rolling radius per wheel (slip-aware odometry R_w - truth; NEES (R_w - R_a)^2 / sigma^2, 1 dof)\n" +
+                    t.Format() + "Mean NEES with correlated samples (batch means):\n" + correlated.Format();
+  for (const RollingRadiusError& w : r.rolling_radius) {
+    if (w.zero_sigma_count > 0) {
+      out += "  " + w.wheel + ": " + std::to_string(w.zero_sigma_count) + " estimates with sigma 0: no NEES\n";
+    }
+  }
+  return out;
+}
+
 json StatsJson(const ErrorStatistics& s) {
   return {{"count", s.count}, {"mean", s.mean}, {"std", s.std}, {"rms", s.rms}, {"max_abs", s.max_abs}};
 }
@@ -240,13 +270,23 @@ std::string FormatReportText(const EvaluationResult& r, const ReportInputs& in) 
         << in.skipped_estimate_lines << "\n";
   }
   out << "\n" << PositionSection(r) << "\n" << NeesSection(r) << "\n" << NisSection(r) << "\n"
-      << DriftSection(r) << "\n" << SlipSection(r);
+      << DriftSection(r) << "\n" << SlipSection(r) << "\n" << RollingRadiusSection(r);
   return out.str();
 }
 
 std::string FormatReportJson(const EvaluationResult& r, const ReportInputs& in) {
   json slip = json::array();
   for (const WheelSlipError& w : r.slip) slip.push_back({{"wheel", w.wheel}, {"error", StatsJson(w.error)}});
+  json rolling_radius = json::array();
+  for (const RollingRadiusError& w : r.rolling_radius) {
+    rolling_radius.push_back({{"wheel", w.wheel},
+                              {"error_m", StatsJson(w.error_m)},
+                              {"nees", ConsistencyJson(w.nees)},
+                              {"zero_sigma_count", w.zero_sigma_count},
+                              {"final_estimate_m", w.final_estimate_m},
+                              {"final_sigma_m", w.final_sigma_m},
+                              {"final_truth_m", w.final_truth_m}});
+  }
   const PositionSummary& p = r.position;
   json j = {
       {"schema", "rowloc-evaluation/1"},
@@ -268,7 +308,8 @@ std::string FormatReportJson(const EvaluationResult& r, const ReportInputs& in) 
       {"nees_singular_covariance_count", r.singular_covariance_count},
       {"innovations", InnovationsJson(r.innovations)},
       {"drift", DriftJson(r.drift)},
-      {"slip", slip}};
+      {"slip", slip},
+      {"rolling_radius", rolling_radius}};
   return j.dump(2) + "\n";
 }
 

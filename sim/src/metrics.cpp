@@ -44,6 +44,16 @@ std::string Seconds(double t_s) {
   out << t_s << " s";
   return out.str();
 }
+
+/// Per-wheel values at fraction s between two samples: the wheels named in both.
+std::map<std::string, double> InterpolateWheels(const std::map<std::string, double>& v0,
+                                                const std::map<std::string, double>& v1, double s) {
+  std::map<std::string, double> out;
+  for (const auto& [wheel, value0] : v0) {
+    if (const auto it = v1.find(wheel); it != v1.end()) out[wheel] = value0 + s * (it->second - value0);
+  }
+  return out;
+}
 }  // namespace
 
 TruthState InterpolateTruth(const TruthStream& truth, double t_s) {
@@ -63,6 +73,7 @@ TruthState InterpolateTruth(const TruthStream& truth, double t_s) {
     out.position_m = last.position_m;
     out.phi_rad = WrapAngle(last.phi_rad);
     out.wheel_slip = last.wheel_slip;
+    out.wheel_rolling_radius_m = last.wheel_rolling_radius_m;
     return out;
   }
   const TruthSample& s1 = *after;
@@ -70,11 +81,8 @@ TruthState InterpolateTruth(const TruthStream& truth, double t_s) {
   const double s = (t_s - s0.t_s) / (s1.t_s - s0.t_s);
   out.position_m = s0.position_m + s * (s1.position_m - s0.position_m);
   out.phi_rad = WrapAngle(s0.phi_rad + s * WrapAngle(s1.phi_rad - s0.phi_rad));
-  for (const auto& [wheel, slip0] : s0.wheel_slip) {
-    if (const auto it = s1.wheel_slip.find(wheel); it != s1.wheel_slip.end()) {
-      out.wheel_slip[wheel] = slip0 + s * (it->second - slip0);
-    }
-  }
+  out.wheel_slip = InterpolateWheels(s0.wheel_slip, s1.wheel_slip, s);
+  out.wheel_rolling_radius_m = InterpolateWheels(s0.wheel_rolling_radius_m, s1.wheel_rolling_radius_m, s);
   return out;
 }
 
@@ -268,6 +276,7 @@ EvaluationResult Evaluate(const TruthStream& truth, const EstimateStream& estima
   r.innovations = AnalyzeInnovations(estimates.updates, options.max_lag, options.probability);
   r.drift = DriftAfterFixLoss(truth, r.pose_errors, options.drift_min_duration_s);
   r.slip = CompareWheelSlip(truth, estimates);
+  r.rolling_radius = CompareRollingRadius(truth, estimates, options.probability);
   return r;
 }
 

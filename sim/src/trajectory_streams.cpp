@@ -25,9 +25,10 @@ struct LineContext {
   }
 };
 
-const json& Require(const json& obj, const std::string& key, const LineContext& ctx) {
+/// obj[key]; `prefix` + key names it in the message (nested objects).
+const json& Require(const json& obj, const std::string& key, const LineContext& ctx, const std::string& prefix = "") {
   const auto it = obj.find(key);
-  if (it == obj.end()) ctx.Fail(key, "missing required key");
+  if (it == obj.end()) ctx.Fail(prefix + key, "missing required key");
   return *it;
 }
 
@@ -42,10 +43,11 @@ double RequireNumber(const json& obj, const std::string& key, const LineContext&
   return ToFiniteNumber(Require(obj, key, ctx), key, ctx);
 }
 
-std::optional<double> OptionalNumber(const json& obj, const std::string& key, const LineContext& ctx) {
+std::optional<double> OptionalNumber(const json& obj, const std::string& key, const LineContext& ctx,
+                                     const std::string& prefix = "") {
   const auto it = obj.find(key);
   if (it == obj.end()) return std::nullopt;
-  return ToFiniteNumber(*it, key, ctx);
+  return ToFiniteNumber(*it, prefix + key, ctx);
 }
 
 bool RequireBool(const json& obj, const std::string& key, const LineContext& ctx) {
@@ -101,15 +103,40 @@ std::map<std::string, double> WheelNumbers(const json& value, const std::string&
   return out;
 }
 
-/// Truth "wheels": {name: {"slip": number, ...}}; slip is optional per wheel.
-std::map<std::string, double> TruthWheelSlip(const json& value, const LineContext& ctx) {
+/// Truth "wheels": {name: {"slip": number, "rolling_radius_m": number > 0, ...}}; both are
+/// optional per wheel.
+void ParseTruthWheels(const json& value, const LineContext& ctx, TruthSample& out) {
   if (!value.is_object()) ctx.Fail("wheels", "expected an object, got " + std::string(value.type_name()));
-  std::map<std::string, double> out;
   for (const auto& [name, wheel] : value.items()) {
+    const std::string prefix = "wheels." + name + ".";
     if (!wheel.is_object()) ctx.Fail("wheels." + name, "expected an object");
-    if (const auto it = wheel.find("slip"); it != wheel.end()) {
-      out[name] = ToFiniteNumber(*it, "wheels." + name + ".slip", ctx);
+    if (const auto slip = OptionalNumber(wheel, "slip", ctx, prefix)) out.wheel_slip[name] = *slip;
+    if (const auto radius = OptionalNumber(wheel, "rolling_radius_m", ctx, prefix)) {
+      if (*radius <= 0.0) ctx.Fail(prefix + "rolling_radius_m", "rolling radius must be > 0");
+      out.wheel_rolling_radius_m[name] = *radius;
     }
+  }
+}
+
+/// Estimate "wheel_calibration": {name: {rolling_radius_m, rolling_radius_sigma_m, slip_compliance,
+/// slip_compliance_sigma}}, all required, R_w > 0, the others >= 0.
+std::vector<WheelCalibrationRecord> WheelCalibration(const json& value, const LineContext& ctx) {
+  const std::string key = "wheel_calibration";
+  if (!value.is_object()) ctx.Fail(key, "expected an object, got " + std::string(value.type_name()));
+  std::vector<WheelCalibrationRecord> out;
+  for (const auto& [name, wheel] : value.items()) {  // nlohmann::json objects iterate sorted by key
+    const std::string prefix = key + "." + name + ".";
+    if (!wheel.is_object()) ctx.Fail(key + "." + name, "expected an object, got " + std::string(wheel.type_name()));
+    const auto number = [&](const char* field, bool positive) {
+      const double v = ToFiniteNumber(Require(wheel, field, ctx, prefix), prefix + field, ctx);
+      if (positive ? v <= 0.0 : v < 0.0) ctx.Fail(prefix + field, positive ? "must be > 0" : "must be >= 0");
+      return v;
+    };
+    out.push_back({.wheel = name,
+                   .rolling_radius_m = number("rolling_radius_m", true),
+                   .rolling_radius_sigma_m = number("rolling_radius_sigma_m", false),
+                   .slip_compliance = number("slip_compliance", false),
+                   .slip_compliance_sigma = number("slip_compliance_sigma", false)});
   }
   return out;
 }
@@ -194,7 +221,7 @@ TruthSample ParseTruthLine(const json& obj, double t, const LineContext& ctx) {
   s.position_m = {RequireNumber(obj, "x_m", ctx), RequireNumber(obj, "y_m", ctx)};
   s.phi_rad = RequireNumber(obj, "phi_rad", ctx);
   s.gnss_available = RequireBool(obj, "gnss_available", ctx);
-  if (const auto it = obj.find("wheels"); it != obj.end()) s.wheel_slip = TruthWheelSlip(*it, ctx);
+  if (const auto it = obj.find("wheels"); it != obj.end()) ParseTruthWheels(*it, ctx, s);
   s.line = ctx.line;
   return s;
 }
@@ -212,6 +239,7 @@ EstimateSample ParseEstimateLine(const json& obj, double t, const LineContext& c
     s.covariance = SymmetricMatrix(v, v.size() == 9 ? 3 : 2, Definiteness::kSemi, "covariance_xy_phi", ctx);
   }
   if (const auto it = obj.find("slip"); it != obj.end()) s.wheel_slip = WheelNumbers(*it, "slip", ctx);
+  if (const auto it = obj.find("wheel_calibration"); it != obj.end()) s.wheel_calibration = WheelCalibration(*it, ctx);
   s.line = ctx.line;
   return s;
 }

@@ -17,7 +17,9 @@ add_test(NAME apps.replay_writes_wheel_calibration
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/file_contains.cmake)
 set_tests_properties(apps.replay_writes_wheel_calibration PROPERTIES LABELS apps
                      FIXTURES_REQUIRED "simulate_tiles;replay_tiles")
-rowloc_cli_test(replay_output_evaluates ON "position, total \\[m\\] +[0-9]+ +0\\.0[0-4]"
+# ... and evaluate compares R_w with the truth's rolling radius (tiles: 0.165 m).
+rowloc_cli_test(replay_output_evaluates ON
+                "position, total \\[m\\] +[0-9]+ +0\\.0[0-4].*Rolling radius per wheel.*left_front +[0-9]+ .* 0\\.16500"
                 evaluate ${_sim_out}/tiles-a/truth.ndjson ${_replay_out}/tiles-a.ndjson --clip-to-truth
                 -o ${_replay_out}/tiles-a-report --no-plots)
 set_tests_properties(apps.replay_runs_on_simulated_log PROPERTIES FIXTURES_REQUIRED simulate_tiles

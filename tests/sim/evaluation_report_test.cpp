@@ -70,15 +70,42 @@ TEST(ReportText, HasEverySectionAndAlignedTables) {
 
 TEST(ReportText, SaysWhatIsNotReported) {
   TruthStream truth;
-  truth.samples = {TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, 2}, TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, 3}};
+  truth.samples = {TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {}, 2},
+                   TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {}, 3}};
   EstimateStream est;
-  est.estimates = {EstimateSample{0.5, {0.5, 0.1}, std::nullopt, std::nullopt, {}, 2}};
+  est.estimates = {EstimateSample{0.5, {0.5, 0.1}, std::nullopt, std::nullopt, {}, {}, 2}};
   const std::string text = FormatReportText(Evaluate(truth, est, {}), {});
   EXPECT_THAT(text, HasSubstr("heading: not reported"));
   EXPECT_THAT(text, HasSubstr("NEES: not reported"));
   EXPECT_THAT(text, HasSubstr("NIS: not reported"));
   EXPECT_THAT(text, HasSubstr("no GNSS outage"));
   EXPECT_THAT(text, HasSubstr("Slip error: not reported"));
+  EXPECT_THAT(text, HasSubstr("Rolling radius: not reported"));
+}
+
+TEST(Report, RollingRadiusSectionInTextAndJson) {
+  TruthStream truth;
+  truth.samples = {TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 2},
+                   TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 3}};
+  EstimateStream est;
+  for (int k = 0; k < 4; ++k) {
+    EstimateSample e{0.25 * k, {0.25 * k, 0.0}, std::nullopt, std::nullopt, {}, {}, static_cast<std::size_t>(k + 2)};
+    e.wheel_calibration = {{"left", 0.162, k == 3 ? 0.0 : 0.001, 0.5, 0.1}};
+    est.estimates.push_back(e);
+  }
+  const EvaluationResult r = Evaluate(truth, est, {});
+  const std::string text = FormatReportText(r, {});
+  EXPECT_THAT(text, HasSubstr("Rolling radius per wheel"));
+  EXPECT_THAT(text, HasSubstr("0.16200 +- 0.00000"));  // the last estimate's R_w and sigma
+  EXPECT_THAT(text, HasSubstr("left: 1 estimates with sigma 0: no NEES"));
+  const auto j = nlohmann::json::parse(FormatReportJson(r, {}));
+  const auto& left = j.at("rolling_radius").at(0);
+  EXPECT_EQ(left.at("wheel"), "left");
+  EXPECT_NEAR(left.at("error_m").at("mean").get<double>(), 0.002, 1e-12);
+  EXPECT_NEAR(left.at("nees").at("mean").get<double>(), 4.0, 1e-9);  // (2 mm / 1 mm)^2
+  EXPECT_EQ(left.at("nees").at("count").get<std::size_t>(), 3u);
+  EXPECT_EQ(left.at("zero_sigma_count").get<std::size_t>(), 1u);
+  EXPECT_DOUBLE_EQ(left.at("final_truth_m").get<double>(), 0.16);
 }
 
 TEST(ReportJson, CarriesTheNumbers) {

@@ -78,6 +78,8 @@ TEST(InterpolateTruth, IsLinearAndHeadingTakesTheShortWayRound) {
   t.samples = {Truth(0.0, 0.0, 0.0, 3.1), Truth(2.0, 4.0, -2.0, -3.1)};
   t.samples[0].wheel_slip = {{"left", 0.1}, {"right", 0.2}};
   t.samples[1].wheel_slip = {{"left", 0.3}};
+  t.samples[0].wheel_rolling_radius_m = {{"left", 0.16}, {"right", 0.15}};
+  t.samples[1].wheel_rolling_radius_m = {{"right", 0.17}};
   const TruthState mid = InterpolateTruth(t, 1.0);
   EXPECT_DOUBLE_EQ(mid.position_m.x(), 2.0);
   EXPECT_DOUBLE_EQ(mid.position_m.y(), -1.0);
@@ -87,6 +89,9 @@ TEST(InterpolateTruth, IsLinearAndHeadingTakesTheShortWayRound) {
   EXPECT_NEAR(quarter.phi_rad, 3.1 + 0.25 * (2.0 * kPi - 6.2), 1e-12);
   EXPECT_DOUBLE_EQ(quarter.wheel_slip.at("left"), 0.15);
   EXPECT_EQ(quarter.wheel_slip.count("right"), 0u);  // not in both samples
+  EXPECT_DOUBLE_EQ(quarter.wheel_rolling_radius_m.at("right"), 0.155);
+  EXPECT_EQ(quarter.wheel_rolling_radius_m.count("left"), 0u);
+  EXPECT_DOUBLE_EQ(InterpolateTruth(t, 2.0).wheel_rolling_radius_m.at("right"), 0.17);  // the last sample
   EXPECT_DOUBLE_EQ(InterpolateTruth(t, 2.0).position_m.x(), 4.0);  // end points inclusive
   EXPECT_DOUBLE_EQ(InterpolateTruth(t, 0.0).position_m.x(), 0.0);
 }
@@ -397,6 +402,61 @@ TEST(Slip, PerWheelErrorAgainstInterpolatedTruth) {
   EXPECT_NEAR(s[0].error.rms, std::sqrt((0.0009 + 0.0004) / 2.0), 1e-12);
   EXPECT_EQ(s[1].error.count, 1u);
   EXPECT_NEAR(s[1].error.max_abs, 0.0, 1e-12);
+}
+
+TEST(RollingRadius, ErrorAndNeesPerWheelAgainstInterpolatedTruth) {
+  TruthStream truth = StraightTruth(3);
+  for (auto& s : truth.samples) s.wheel_rolling_radius_m = {{"left", 0.16 + 0.01 * s.t_s}, {"right", 0.16}};
+  EstimateStream est;
+  est.estimates = {Estimate(0.5, 0.5, 0.0), Estimate(1.0, 1.0, 0.0), Estimate(1.5, 1.5, 0.0), Estimate(2.0, 2.0, 0.0)};
+  est.estimates[0].wheel_calibration = {{"left", 0.167, 0.001, 1.0, 1.0}, {"spare", 0.2, 0.01, 1.0, 1.0}};
+  // the estimate at t = 1.0 carries no calibration
+  est.estimates[2].wheel_calibration = {{"left", 0.173, 0.002, 1.0, 1.0}, {"right", 0.16, 0.0, 1.0, 1.0}};
+  est.estimates[3].wheel_calibration = {{"left", 0.18, 0.004, 0.5, 0.5}};
+  const std::vector<RollingRadiusError> r = CompareRollingRadius(truth, est);
+  ASSERT_EQ(r.size(), 2u);  // "spare" has no truth
+  const RollingRadiusError& left = r[0];
+  EXPECT_EQ(left.wheel, "left");
+  EXPECT_EQ(left.error_m.count, 3u);
+  EXPECT_NEAR(left.error_m.mean, (0.002 - 0.002 + 0.0) / 3.0, 1e-12);
+  EXPECT_NEAR(left.error_m.max_abs, 0.002, 1e-12);
+  ASSERT_EQ(left.nees.count, 3u);
+  EXPECT_NEAR(left.nees.mean, (4.0 + 1.0 + 0.0) / 3.0, 1e-9);
+  EXPECT_DOUBLE_EQ(left.nees.total_dof, 3.0);
+  EXPECT_EQ(left.zero_sigma_count, 0u);
+  EXPECT_DOUBLE_EQ(left.final_estimate_m, 0.18);
+  EXPECT_DOUBLE_EQ(left.final_sigma_m, 0.004);
+  EXPECT_NEAR(left.final_truth_m, 0.18, 1e-12);
+  const RollingRadiusError& right = r[1];
+  EXPECT_EQ(right.error_m.count, 1u);
+  EXPECT_EQ(right.nees.count, 0u);  // sigma 0: no NEES, counted
+  EXPECT_EQ(right.zero_sigma_count, 1u);
+  EXPECT_TRUE(CompareRollingRadius(truth, EstimateStream{}).empty());
+}
+
+// A consistent calibration (errors drawn with the reported sigma) has its mean NEES inside the
+// band; the same draws with a bias of 3 sigma do not.
+TEST(RollingRadius, NeesSeparatesConsistentFromBiasedCalibration) {
+  TruthStream truth = StraightTruth(2);
+  for (auto& s : truth.samples) s.wheel_rolling_radius_m = {{"left", 0.16}};
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  EstimateStream consistent;
+  EstimateStream biased;
+  for (int k = 0; k < 2000; ++k) {
+    const double t = k / 2000.0;
+    const double sigma = 0.001 * (1.0 + k % 5);
+    const double error = sigma * normal(rng);
+    consistent.estimates.push_back(Estimate(t, t, 0.0));
+    consistent.estimates.back().wheel_calibration = {{"left", 0.16 + error, sigma, 1.0, 1.0}};
+    biased.estimates.push_back(Estimate(t, t, 0.0));
+    biased.estimates.back().wheel_calibration = {{"left", 0.16 + error + 3.0 * sigma, sigma, 1.0, 1.0}};
+  }
+  const RollingRadiusError good = CompareRollingRadius(truth, consistent).at(0);
+  EXPECT_TRUE(good.nees.mean_inside) << good.nees.mean;
+  const RollingRadiusError bad = CompareRollingRadius(truth, biased).at(0);
+  EXPECT_FALSE(bad.nees.mean_inside);
+  EXPECT_GT(bad.nees.mean, 9.0);
 }
 
 TEST(Evaluate, RejectsAnEmptyEstimateStream) {

@@ -31,7 +31,7 @@ TEST(TruthStream, ParsesSamplesIgnoringUnknownKeysAndSkippingUnknownTypes) {
   const TruthStream s = ParseTruth(
       kTruthHeader + "\n" +
       R"({"type":"truth","t":1.5,"x_m":10.2,"y_m":3.75,"phi_rad":0.25,"gnss_available":true,"future_key":[1,2],)"
-      R"("wheels":{"front_left":{"slip":0.0125,"terrain":"grass"},"rear":{"speed_radps":3.0}}})" "\n\n"
+      R"("wheels":{"front_left":{"slip":0.0125,"terrain":"grass"},"rear":{"speed_radps":3.0,"rolling_radius_m":0.16}}})" "\n\n"
       R"({"type":"annotation","text":"ignored"})" "\n"
       R"({"type":"truth","t":1.5,"x_m":10.3,"y_m":3.7,"phi_rad":-0.1,"gnss_available":false})" "\n");
   EXPECT_EQ(s.protocol, "rowloc-truth/1");
@@ -45,6 +45,8 @@ TEST(TruthStream, ParsesSamplesIgnoringUnknownKeysAndSkippingUnknownTypes) {
   EXPECT_TRUE(a.gnss_available);
   ASSERT_EQ(a.wheel_slip.size(), 1u);  // "rear" has no slip
   EXPECT_DOUBLE_EQ(a.wheel_slip.at("front_left"), 0.0125);
+  ASSERT_EQ(a.wheel_rolling_radius_m.size(), 1u);  // "front_left" has no radius
+  EXPECT_DOUBLE_EQ(a.wheel_rolling_radius_m.at("rear"), 0.16);
   EXPECT_EQ(a.line, 2u);
   EXPECT_FALSE(s.samples[1].gnss_available);
   EXPECT_EQ(s.samples[1].line, 5u);  // blank line counted
@@ -60,7 +62,9 @@ TEST(EstimateStream, ParsesRequiredAndOptionalKeys) {
       R"({"type":"estimate","t":0,"x_m":1,"y_m":2})" "\n"
       R"({"type":"estimate","t":1,"x_m":1,"y_m":2,"phi_rad":0.5,"covariance_xy_phi":[1e-4,0,0,0,2e-4,1e-6,0,1e-6,1e-5],)"
       R"("slip":{"front_left":0.013}})" "\n"
-      R"({"type":"estimate","t":2,"x_m":1,"y_m":2,"covariance_xy_phi":[1,0.5,0.5,2]})" "\n"
+      R"({"type":"estimate","t":2,"x_m":1,"y_m":2,"covariance_xy_phi":[1,0.5,0.5,2],"wheel_calibration":)"
+      R"({"right":{"rolling_radius_m":0.16,"rolling_radius_sigma_m":0.002,"slip_compliance":0.7,"slip_compliance_sigma":0.2},)"
+      R"("left":{"rolling_radius_m":0.15,"rolling_radius_sigma_m":0,"slip_compliance":0,"slip_compliance_sigma":0.3}}})" "\n"
       R"({"type":"update","t":2,"sensor":"gnss","innovation":[0.01,-0.02],"innovation_covariance":[2e-4,0,0,2e-4],)"
       R"("nis":2.5,"accepted":false,"extra":null})" "\n");
   ASSERT_EQ(s.estimates.size(), 3u);
@@ -74,6 +78,15 @@ TEST(EstimateStream, ParsesRequiredAndOptionalKeys) {
   EXPECT_DOUBLE_EQ(*s.estimates[1].phi_rad, 0.5);
   EXPECT_DOUBLE_EQ(s.estimates[1].wheel_slip.at("front_left"), 0.013);
   EXPECT_EQ(s.estimates[2].covariance->rows(), 2);
+  EXPECT_TRUE(s.estimates[1].wheel_calibration.empty());
+  const auto& calibration = s.estimates[2].wheel_calibration;
+  ASSERT_EQ(calibration.size(), 2u);
+  EXPECT_EQ(calibration[0].wheel, "left");  // sorted by name
+  EXPECT_DOUBLE_EQ(calibration[0].rolling_radius_m, 0.15);
+  EXPECT_DOUBLE_EQ(calibration[0].slip_compliance_sigma, 0.3);
+  EXPECT_EQ(calibration[1].wheel, "right");
+  EXPECT_DOUBLE_EQ(calibration[1].rolling_radius_sigma_m, 0.002);
+  EXPECT_DOUBLE_EQ(calibration[1].slip_compliance, 0.7);
   ASSERT_EQ(s.updates.size(), 1u);
   const UpdateRecord& u = s.updates[0];
   EXPECT_EQ(u.sensor, "gnss");
@@ -164,6 +177,10 @@ INSTANTIATE_TEST_SUITE_P(
                  "truth.ndjson:2: malformed JSON: [json.exception.out_of_range.406] number overflow parsing '1e999'"},
         BadInput{"WheelSlipWrongType", true, "{" + kTruthLine + R"(,"wheels":{"fl":{"slip":"x"}}})" "\n",
                  "truth.ndjson:2: key 'wheels.fl.slip': expected a number"},
+        BadInput{"TruthRadiusNotPositive", true, "{" + kTruthLine + R"(,"wheels":{"fl":{"rolling_radius_m":0}}})" "\n",
+                 "truth.ndjson:2: key 'wheels.fl.rolling_radius_m': rolling radius must be > 0"},
+        BadInput{"TruthRadiusWrongType", true, "{" + kTruthLine + R"(,"wheels":{"fl":{"rolling_radius_m":null}}})" "\n",
+                 "truth.ndjson:2: key 'wheels.fl.rolling_radius_m': expected a number"},
         BadInput{"TimeBackwards", true, "{" + kTruthLine + "}\n" + R"({"type":"truth","t":0.5,"x_m":0,"y_m":0,"phi_rad":0,"gnss_available":true})" "\n",
                  "truth.ndjson:3: key 't': time goes backwards"},
         BadInput{"MajorVersion2", true, R"({"type":"truth_header","protocol":"rowloc-truth/2"})" "\n",
@@ -194,6 +211,31 @@ INSTANTIATE_TEST_SUITE_P(
                  "key 'innovation_covariance': matrix is not positive definite"},
         BadInput{"SlipNotObject", false, R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"slip":[0.1]})" "\n",
                  "key 'slip': expected an object"},
+        BadInput{"CalibrationNotObject", false, R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":[1]})" "\n",
+                 "est.ndjson:2: key 'wheel_calibration': expected an object, got array"},
+        BadInput{"CalibrationWheelNotObject", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":0.16}})" "\n",
+                 "key 'wheel_calibration.l': expected an object, got number"},
+        BadInput{"CalibrationMissingSigma", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
+                 R"("slip_compliance":0.7,"slip_compliance_sigma":0.2}}})" "\n",
+                 "key 'wheel_calibration.l.rolling_radius_sigma_m': missing required key"},
+        BadInput{"CalibrationRadiusNotPositive", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":-0.16,)"
+                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.7,"slip_compliance_sigma":0.2}}})" "\n",
+                 "key 'wheel_calibration.l.rolling_radius_m': must be > 0"},
+        BadInput{"CalibrationNegativeCompliance", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
+                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":-0.1,"slip_compliance_sigma":0.2}}})" "\n",
+                 "key 'wheel_calibration.l.slip_compliance': must be >= 0"},
+        BadInput{"CalibrationNegativeSigma", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
+                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":-0.2}}})" "\n",
+                 "key 'wheel_calibration.l.slip_compliance_sigma': must be >= 0"},
+        BadInput{"CalibrationWrongType", false,
+                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":"0.16",)"
+                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":0.2}}})" "\n",
+                 "key 'wheel_calibration.l.rolling_radius_m': expected a number, got string"},
         BadInput{"UpdateSizeMismatch", false,
                  R"({"type":"update","t":0,"sensor":"g","innovation":[1,2],"innovation_covariance":[1],"nis":1,"accepted":true})" "\n",
                  "est.ndjson:2: key 'innovation_covariance': expected 4 numbers"},

@@ -11,6 +11,7 @@
 
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/sim/gnss_model.hpp"
+#include "rowloc/sim/wheel_calibration_record.hpp"
 
 #include <Eigen/Core>
 
@@ -136,16 +137,6 @@ class TruthLogWriter {
   std::vector<std::string> wheels_;
   double last_time_s_ = -std::numeric_limits<double>::infinity();
   std::size_t records_ = 0;
-};
-
-/// The slip-aware odometry's calibration states of one wheel (docs/protocol.md §3
-/// `wheel_calibration`): rolling radius R_w and slip compliance kappa with their standard deviations.
-struct WheelCalibrationRecord {
-  std::string wheel;
-  double rolling_radius_m = 0.0;        ///< > 0
-  double rolling_radius_sigma_m = 0.0;  ///< >= 0
-  double slip_compliance = 0.0;         ///< kappa, slip per unit traction coefficient, >= 0
-  double slip_compliance_sigma = 0.0;   ///< >= 0
 };
 
 struct EstimateRecord {

@@ -3,7 +3,8 @@
 //
 // Math (docs/validation.md gives the full definitions):
 //  - Truth at an estimate's time t: linear interpolation between the bracketing truth samples,
-//    heading interpolated on the circle (phi0 + s wrap(phi1 - phi0)), per-wheel slip linearly.
+//    heading interpolated on the circle (phi0 + s wrap(phi1 - phi0)), per-wheel slip and rolling
+//    radius linearly.
 //    An estimate outside [t_first, t_last] of the truth is an EvaluationError (no extrapolation).
 //  - Error e = estimate - truth (world ENU). Reference direction u: the direction of the row
 //    segment nearest to the true position (flipped to agree with the true heading) when a row map
@@ -27,6 +28,9 @@
 //    the first estimate at or after the start, of the last estimate at or before the end, their
 //    difference (growth) and the largest error in between.
 //  - Slip: estimate's slip minus the interpolated truth's slip, per wheel named in both.
+//  - Rolling radius (the slip-aware odometry's R_w, `wheel_calibration`) against the truth's
+//    rolling_radius_m, per wheel named in both: error R_w - R_a, and its NEES
+//    (R_w - R_a)^2 / sigma_R^2 (1 dof) over the estimates whose sigma_R > 0.
 #pragma once
 
 #include "rowloc/geometry/segment_index.hpp"
@@ -70,6 +74,7 @@ struct TruthState {
   Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
   double phi_rad = 0.0;
   std::map<std::string, double> wheel_slip;  ///< wheels with a slip in both bracketing samples
+  std::map<std::string, double> wheel_rolling_radius_m;  ///< wheels with a radius in both, m
 };
 
 /// Truth interpolated at t_s. Throws EvaluationError if the truth is empty or t_s is outside its span.
@@ -183,6 +188,20 @@ struct WheelSlipError {
 /// Per wheel named in both an estimate's slip and the interpolated truth, sorted by name.
 std::vector<WheelSlipError> CompareWheelSlip(const TruthStream& truth, const EstimateStream& estimates);
 
+struct RollingRadiusError {
+  std::string wheel;
+  ErrorStatistics error_m;        ///< R_w - R_a over every estimate with both, m
+  ConsistencySummary nees;        ///< (R_w - R_a)^2 / sigma^2, 1 dof, estimates with sigma > 0
+  std::size_t zero_sigma_count = 0;  ///< estimates with sigma = 0 (no NEES)
+  double final_estimate_m = 0.0;  ///< R_w of the last estimate with both
+  double final_sigma_m = 0.0;     ///< its sigma
+  double final_truth_m = 0.0;     ///< R_a interpolated at its time
+};
+/// Per wheel named in both an estimate's `wheel_calibration` and the interpolated truth's
+/// rolling radius, sorted by name; empty when no estimate carries a calibration.
+std::vector<RollingRadiusError> CompareRollingRadius(const TruthStream& truth, const EstimateStream& estimates,
+                                                     double probability = 0.95);
+
 struct EvaluationOptions {
   std::size_t max_lag = 50;          ///< whiteness lags 1..max_lag
   double probability = 0.95;         ///< of every band
@@ -203,6 +222,7 @@ struct EvaluationResult {
   std::vector<SensorInnovationResult> innovations;
   std::vector<DriftInterval> drift;
   std::vector<WheelSlipError> slip;
+  std::vector<RollingRadiusError> rolling_radius;
   EvaluationOptions options;
 };
 

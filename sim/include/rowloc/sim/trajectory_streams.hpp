@@ -7,7 +7,8 @@
 // lines of an unknown `type` are skipped and counted (never silently: the count is returned).
 // Blank lines are skipped. Every other defect is a StreamFormatError whose message names the
 // file, the 1-based line number and the key: malformed JSON, a missing required key, a wrong
-// type, a non-finite number, an estimate covariance that is not symmetric positive semi-definite
+// type, a non-finite number, a truth rolling radius <= 0, a `wheel_calibration` entry out of its
+// domain (R_w <= 0, negative kappa or sigma), an estimate covariance that is not symmetric positive semi-definite
 // (singular ones, e.g. a known initial pose, are allowed), an innovation covariance S that is not
 // symmetric positive definite, or a time `t`
 // smaller than the previous line's (time never decreases within one stream; in the estimate
@@ -17,6 +18,8 @@
 // checked to a relative tolerance of 1e-9 of the largest entry; semi-definiteness by the smallest
 // eigenvalue (>= -1e-12 of the largest entry), definiteness by a successful Eigen LLT. Angles are taken as written (a reader does not re-wrap them).
 #pragma once
+
+#include "rowloc/sim/wheel_calibration_record.hpp"
 
 #include <Eigen/Core>
 
@@ -45,6 +48,8 @@ struct TruthSample {
   double phi_rad = 0.0;                                  ///< heading from +East, CCW
   bool gnss_available = true;
   std::map<std::string, double> wheel_slip;              ///< wheel name -> SAE slip (if given)
+  /// wheel name -> true rolling radius R_a, m (> 0; if given; `wheels.<name>.rolling_radius_m`)
+  std::map<std::string, double> wheel_rolling_radius_m;
   std::size_t line = 0;                                  ///< 1-based line in the file
 };
 
@@ -63,6 +68,9 @@ struct EstimateSample {
   /// Covariance of (x, y, phi) (3x3) or of (x, y) (2x2), m^2 / m rad / rad^2; symmetric PSD.
   std::optional<Eigen::MatrixXd> covariance;
   std::map<std::string, double> wheel_slip;
+  /// `wheel_calibration`, sorted by wheel name: every entry has all four numbers, finite, with
+  /// R_w > 0 and kappa and both sigmas >= 0 (else a StreamFormatError).
+  std::vector<WheelCalibrationRecord> wheel_calibration;
   std::size_t line = 0;
 };
 
