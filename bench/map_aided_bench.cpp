@@ -279,7 +279,7 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, Variant var
   const auto reset = [&](loc::VehicleEkf& ekf, std::size_t b) {
     ekf = base;
     ekf.SetPose(0.0, blocks[b].start, PoseCovariance());
-    if (variant == Variant::kDriving) ekf.Process(loc::WheelsMessage{0.0, wheel_speeds, std::nullopt});
+    if (variant == Variant::kDriving) ekf.Process(loc::WheelsMessage{0.0, wheel_speeds, std::nullopt, std::nullopt});
   };
 
   // Setup check: one pass over every block, untimed. Every echo must find its row, no state may

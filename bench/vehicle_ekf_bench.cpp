@@ -37,8 +37,15 @@ Eigen::Vector2d Rotate(double a, const Eigen::Vector2d& v) {
   return {std::cos(a) * v.x() - std::sin(a) * v.y(), std::sin(a) * v.x() + std::cos(a) * v.y()};
 }
 
-/// Messages of cycle k of the lap (times relative to the lap start).
-std::vector<std::vector<loc::SensorMessage>> MakeLap(const VehicleConfig& v, bool torque) {
+/// Wheel i's exact rate on the circle (rad/s): the encoders' angle at time t is t times it.
+double WheelRate(const rowloc::mapio::WheelGeometry& w) {
+  const Eigen::Vector2d c(kSpeed - kYawRate * w.position_m.y(), kYawRate * w.position_m.x());
+  return (w.steerable ? c.norm() : c.x()) / w.nominal_radius_m;
+}
+
+/// Messages of cycle k of the lap (times relative to the lap start; wheel angles, when wanted, are
+/// set by Converged::RunCycle from the absolute time).
+std::vector<std::vector<loc::SensorMessage>> MakeLap(const VehicleConfig& v, bool torque, bool angles) {
   const rowloc::mapio::LocalFrame frame(kOrigin);
   std::mt19937_64 rng(4);
   std::normal_distribution<double> n01;
@@ -58,13 +65,14 @@ std::vector<std::vector<loc::SensorMessage>> MakeLap(const VehicleConfig& v, boo
                                      kYawRate * kSpeed - kYawRate * kYawRate * l.y() + 0.01 * n01(rng),
                                      kYawRate + 5e-4 * n01(rng)});
     loc::SteeringMessage steering{t, {}};
-    loc::WheelsMessage wheels{t, {}, std::nullopt};
+    loc::WheelsMessage wheels{t, {}, std::nullopt, std::nullopt};
     for (const auto& w : v.wheels) {
       const Eigen::Vector2d c(kSpeed - kYawRate * w.position_m.y(), kYawRate * w.position_m.x());
       steering.angle_rad.push_back(w.steerable ? std::optional<double>(std::atan2(c.y(), c.x())) : std::nullopt);
       wheels.speed_radps.push_back((w.steerable ? c.norm() : c.x()) / w.nominal_radius_m + 0.01 * n01(rng));
     }
     if (torque) wheels.torque_nm = std::vector<double>(v.wheels.size(), 2.0);
+    if (angles) wheels.angle_rad = std::vector<double>(v.wheels.size(), 0.0);
     if (steers) lap[k].push_back(steering);
     lap[k].push_back(wheels);
   }
@@ -78,8 +86,11 @@ struct Converged {
   long cycle = 0;  ///< cycles processed so far (time = 0.01 cycle)
   double accepted_fraction = 0.0;
 
-  Converged(const VehicleConfig& v, bool slip_aware)
-      : ekf(v, Config(slip_aware), kOrigin, Names(v)), lap(MakeLap(v, slip_aware)) {
+  std::vector<double> wheel_rates_radps;  ///< exact, vehicle order (wheel angles)
+
+  Converged(const VehicleConfig& v, bool slip_aware, bool angles = false)
+      : ekf(v, Config(slip_aware, angles), kOrigin, Names(v)), lap(MakeLap(v, slip_aware, angles)) {
+    for (const auto& w : v.wheels) wheel_rates_radps.push_back(WheelRate(w));
     ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal());
     long accepted = 0, updates = 0;
     for (int i = 0; i < 2 * kCyclesPerLap; ++i) {
@@ -95,16 +106,24 @@ struct Converged {
     std::vector<loc::UpdateRecord> records;
     const double t = 0.01 * static_cast<double>(cycle);
     for (loc::SensorMessage& m : lap[static_cast<std::size_t>(cycle % kCyclesPerLap)]) {
-      std::visit([t](auto& message) { message.time_s = t; }, m);
+      SetTime(m, t);
       loc::ProcessResult r = ekf.Process(m);
       for (auto& u : r.updates) records.push_back(std::move(u));
     }
     ++cycle;
     return records;
   }
-  static loc::FilterConfig Config(bool slip_aware) {
+  /// Sets a message's time to t and, for wheels with angles, the angles the wheels turned by t.
+  void SetTime(loc::SensorMessage& m, double t) const {
+    std::visit([t](auto& message) { message.time_s = t; }, m);
+    if (auto* wheels = std::get_if<loc::WheelsMessage>(&m); wheels && wheels->angle_rad) {
+      for (std::size_t i = 0; i < wheel_rates_radps.size(); ++i) (*wheels->angle_rad)[i] = wheel_rates_radps[i] * t;
+    }
+  }
+  static loc::FilterConfig Config(bool slip_aware, bool angles = false) {
     loc::FilterConfig c;
     c.slip_aware_odometry.enabled = slip_aware;
+    c.wheels.angle_measurement = angles;
     return c;
   }
   static std::vector<std::string> Names(const VehicleConfig& v) {
@@ -114,8 +133,9 @@ struct Converged {
   }
 };
 
-void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware, bool steering = true) {
-  Converged c(v, slip_aware);
+void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware, bool steering = true,
+               bool angles = false) {
+  Converged c(v, slip_aware, angles);
   if (!steering) {  // issue 4's cycle exactly: predict + GPS + IMU + wheels (steering angles then float)
     for (auto& messages : c.lap) {
       std::erase_if(messages, [](const loc::SensorMessage& m) { return std::holds_alternative<loc::SteeringMessage>(m); });
@@ -129,7 +149,7 @@ void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware,
   for (auto _ : state) {
     const double t = 0.01 * static_cast<double>(c.cycle);
     for (loc::SensorMessage& m : c.lap[static_cast<std::size_t>(c.cycle % kCyclesPerLap)]) {
-      std::visit([t](auto& message) { message.time_s = t; }, m);
+      c.SetTime(m, t);
       auto result = c.ekf.Process(m);
       benchmark::DoNotOptimize(result);
     }
@@ -145,6 +165,13 @@ void BM_CycleSwerveSlipAware(benchmark::State& state) { RunCycles(state, rowloc:
 void BM_Cycle4ws(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), false); }
 void BM_CycleDifferential(benchmark::State& state) { RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), false); }
 void BM_CycleTracked(benchmark::State& state) { RunCycles(state, rowloc::mapio::TrackedVehicleConfig(), false); }
+/// Issue 4's cycle with wheel angles instead of speeds (wheels.angle_measurement; slip-aware).
+void BM_CycleDifferentialWheelAngles(benchmark::State& state) {
+  RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), true, true, true);
+}
+void BM_CycleDifferentialSlipAware(benchmark::State& state) {
+  RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), true);
+}
 void BM_CycleSwerveWithoutSteeringMessage(benchmark::State& state) {
   RunCycles(state, rowloc::mapio::AgrimaroSwerveConfig(), false, false);
 }
@@ -215,6 +242,8 @@ BENCHMARK(BM_CycleSwerve);
 BENCHMARK(BM_CycleSwerveSlipAware);
 BENCHMARK(BM_Cycle4ws);
 BENCHMARK(BM_CycleDifferential);
+BENCHMARK(BM_CycleDifferentialSlipAware);
+BENCHMARK(BM_CycleDifferentialWheelAngles);
 BENCHMARK(BM_CycleTracked);
 BENCHMARK(BM_CycleSwerveWithoutSteeringMessage);
 BENCHMARK(BM_RestoreStateAndCovariance);

@@ -18,11 +18,13 @@ using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
 bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
 bool IsProbability(double value) { return std::isfinite(value) && value > 0.0 && value < 1.0; }
 
-/// (key path, value, must be a probability instead of positive)
+/// What a value must be: finite and > 0 (the default), in (0, 1), or finite and >= 0.
+enum class Domain { kPositive, kProbability, kNonNegative };
+
 struct Rule {
   const char* key;
   double value;
-  bool probability = false;
+  Domain domain = Domain::kPositive;
 };
 
 std::vector<Rule> Rules(const FilterConfig& c) {
@@ -39,9 +41,9 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m},
       {"slip_aware_odometry.slip_compliance_initial", s.slip_compliance_initial},
       {"slip_aware_odometry.slip_compliance_sigma", s.slip_compliance_sigma},
-      {"slip_aware_odometry.max_model_slip", s.max_model_slip, true},
-      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m},
-      {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m},
+      {"slip_aware_odometry.max_model_slip", s.max_model_slip, Domain::kProbability},
+      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, Domain::kNonNegative},
+      {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, Domain::kNonNegative},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
       {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
       {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps},
@@ -54,26 +56,29 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"gps.sigma_floor_rtk_fixed_m", c.gps.sigma_floor_rtk_fixed_m},
       {"gps.sigma_floor_rtk_float_m", c.gps.sigma_floor_rtk_float_m},
       {"gps.sigma_floor_sbas_m", c.gps.sigma_floor_sbas_m},
-      {"gps.gate_probability", c.gps.gate_probability, true},
+      {"gps.gate_probability", c.gps.gate_probability, Domain::kProbability},
       {"gps.reacquire_after_s", c.gps.reacquire_after_s},
       {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2},
       {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps},
-      {"imu.gate_probability", c.imu.gate_probability, true},
+      {"imu.gate_probability", c.imu.gate_probability, Domain::kProbability},
       {"wheels.speed_sigma_radps", c.wheels.speed_sigma_radps},
       {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction},
       {"wheels.lateral_velocity_sigma_mps", c.wheels.lateral_velocity_sigma_mps},
-      {"wheels.gate_probability", c.wheels.gate_probability, true},
+      {"wheels.gate_probability", c.wheels.gate_probability, Domain::kProbability},
       {"wheels.max_speed_radps", c.wheels.max_speed_radps},
+      {"wheels.encoder_low_pass_time_constant_s", c.wheels.encoder_low_pass_time_constant_s, Domain::kNonNegative},
+      {"wheels.angle_sigma_rad", c.wheels.angle_sigma_rad},
+      {"wheels.angle_rate_noise_radps_per_sqrt_hz", c.wheels.angle_rate_noise_radps_per_sqrt_hz},
       {"steering.angle_sigma_rad", c.steering.angle_sigma_rad},
-      {"steering.gate_probability", c.steering.gate_probability, true},
+      {"steering.gate_probability", c.steering.gate_probability, Domain::kProbability},
       {"vio.sigma_scale", c.vio.sigma_scale},
-      {"vio.gate_probability", c.vio.gate_probability, true},
+      {"vio.gate_probability", c.vio.gate_probability, Domain::kProbability},
       {"map_aided.range_sigma_m", c.map_aided.range_sigma_m},
       {"map_aided.cone_half_angle_rad", c.map_aided.cone_half_angle_rad},
       {"map_aided.max_range_m", c.map_aided.max_range_m},
       {"map_aided.k_sigma", c.map_aided.k_sigma},
       {"map_aided.row_smoothing_m", c.map_aided.row_smoothing_m},
-      {"map_aided.gate_probability", c.map_aided.gate_probability, true},
+      {"map_aided.gate_probability", c.map_aided.gate_probability, Domain::kProbability},
       {"max_prediction_step_s", c.max_prediction_step_s},
       {"max_prediction_gap_s", c.max_prediction_gap_s},
   };
@@ -102,7 +107,8 @@ FilterConfig ReadConfig(Reader& root) {
     c.slip_aware_odometry = {s.Bool("enabled"), s.Number("rolling_radius_sigma_m"),
                              s.Number("slip_compliance_initial"), s.Number("slip_compliance_sigma"),
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
-                             s.Number("slip_compliance_noise_per_sqrt_m"), s.Bool("traction_from_acceleration")};
+                             s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
+                             s.Bool("traction_from_acceleration")};
     s.RejectUnknownKeys();
   }
   {
@@ -130,7 +136,9 @@ FilterConfig ReadConfig(Reader& root) {
     Reader w = root.Object("wheels");
     c.wheels = {w.Number("speed_sigma_radps"), w.Number("speed_sigma_fraction"),
                 w.Number("lateral_velocity_sigma_mps"), w.Number("gate_probability"),
-                w.Number("max_speed_radps"), w.Number("encoder_low_pass_time_constant_s")};
+                w.Number("max_speed_radps"), w.Number("encoder_low_pass_time_constant_s"),
+                w.Bool("angle_measurement"), w.Number("angle_sigma_rad"),
+                w.Number("angle_rate_noise_radps_per_sqrt_hz")};
     w.RejectUnknownKeys();
   }
   {
@@ -163,12 +171,21 @@ FilterConfig ReadConfig(Reader& root) {
 std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
   if (config.name.empty()) return std::string("name must not be empty");
   for (const Rule& rule : Rules(config)) {
-    if (rule.probability && !IsProbability(rule.value)) return std::string(rule.key) + " must be in (0, 1)";
-    if (!rule.probability && !IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
+    switch (rule.domain) {
+      case Domain::kPositive:
+        if (!IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
+        break;
+      case Domain::kProbability:
+        if (!IsProbability(rule.value)) return std::string(rule.key) + " must be in (0, 1)";
+        break;
+      case Domain::kNonNegative:
+        if (!(std::isfinite(rule.value) && rule.value >= 0.0)) return std::string(rule.key) + " must be finite and >= 0";
+        break;
+    }
   }
-  const double lag_s = config.wheels.encoder_low_pass_time_constant_s;
-  if (!(std::isfinite(lag_s) && lag_s >= 0.0)) {
-    return std::string("wheels.encoder_low_pass_time_constant_s must be finite and >= 0");
+  const double rho = config.slip_aware_odometry.slip_compliance_wheel_correlation;
+  if (!(std::isfinite(rho) && rho >= 0.0 && rho < 1.0)) {
+    return std::string("slip_aware_odometry.slip_compliance_wheel_correlation must be in [0, 1)");
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {

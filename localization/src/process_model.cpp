@@ -78,12 +78,22 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
   const SlipAwareOdometryConfig& s = config.slip_aware_odometry;
   for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
     if (layout.steering[i] >= 0) p(layout.steering[i], layout.steering[i]) += steering;
-    if (layout.rolling_radius[i] < 0) continue;
+  }
+  if (!layout.slip_aware()) return;
+  // kappa: q^2 sqrt(d_i d_j) (rho off the diagonal): Q = q^2 D^1/2 C D^1/2, C the correlation matrix.
+  const double kappa_q2 = s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m;
+  const double rho = s.slip_compliance_wheel_correlation;
+  for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
     const double distance = WheelDistance(vehicle.wheels[i], twist, dt);
     p(layout.rolling_radius[i], layout.rolling_radius[i]) +=
         s.rolling_radius_noise_m_per_sqrt_m * s.rolling_radius_noise_m_per_sqrt_m * distance;
-    p(layout.slip_compliance[i], layout.slip_compliance[i]) +=
-        s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m * distance;
+    p(layout.slip_compliance[i], layout.slip_compliance[i]) += kappa_q2 * distance;
+    if (rho == 0.0) continue;
+    for (std::size_t j = 0; j < i; ++j) {
+      const double shared = rho * kappa_q2 * std::sqrt(distance * WheelDistance(vehicle.wheels[j], twist, dt));
+      p(layout.slip_compliance[i], layout.slip_compliance[j]) += shared;
+      p(layout.slip_compliance[j], layout.slip_compliance[i]) += shared;
+    }
   }
 }
 

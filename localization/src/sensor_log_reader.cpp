@@ -198,8 +198,9 @@ std::vector<double> ReadEveryWheel(const JsonFields& fields, const std::string& 
 }
 
 SensorMessage ReadWheels(const JsonFields& fields, const LogHeader& header, double time_s) {
-  WheelsMessage m{time_s, ReadEveryWheel(fields, "speed_radps", header), std::nullopt};
+  WheelsMessage m{time_s, ReadEveryWheel(fields, "speed_radps", header), std::nullopt, std::nullopt};
   if (fields.object().contains("torque_nm")) m.torque_nm = ReadEveryWheel(fields, "torque_nm", header);
+  if (fields.object().contains("angle_rad")) m.angle_rad = ReadEveryWheel(fields, "angle_rad", header);
   return m;
 }
 

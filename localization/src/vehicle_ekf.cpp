@@ -2,6 +2,7 @@
 
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/process_model.hpp"
+#include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/localization/wheel_slip_estimate.hpp"
 
 #include <algorithm>
@@ -58,7 +59,8 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
                        const std::vector<std::string>& wheel_order)
     : vehicle_(Checked(std::move(vehicle))),
       config_(Checked(std::move(config))),
-      layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled, config_.imu.estimate_accel_bias)),
+      layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled, config_.imu.estimate_accel_bias,
+                               config_.wheels.angle_measurement)),
       frame_(origin),
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
@@ -81,6 +83,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
 void VehicleEkf::Reset() {
   initialised_ = false;
   anchor_enu_.reset();
+  wheel_angles_anchored_ = false;
   x_ = Eigen::VectorXd::Zero(layout_.size);
   p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
 }
@@ -108,6 +111,10 @@ void VehicleEkf::PredictTo(double t) {
   double remaining = t - time_s_;
   while (remaining > 0.0) {
     const double dt = std::min(remaining, config_.max_prediction_step_s);
+    if (layout_.has_wheel_angles()) {  // before the base step: F = F_base (I + dt E J), wheel_angle_model.hpp
+      ProjectStates(true);              // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
+      PropagateWheelAngles(vehicle_, layout_, config_, last_torque_nm_, x_, p_, dt, update_buffers_.wheel_rates);
+    }
     PredictStep(vehicle_, layout_, config_, x_, p_, dt);
     remaining -= dt;
   }
@@ -181,18 +188,20 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   }
   ProcessResult result;
   if (!initialised_) return result;
-  ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
   UpdateBuffers& b = update_buffers_;
-  WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
-                  config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
   const auto m = static_cast<Eigen::Index>(n);
-  const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
-  const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
-  b.noise.setZero(m, m);
-  b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
-  b.innovation = z - b.wheels.predicted;
   const double gate = wheel_gates_[n - 1];
-  result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.wheels.jacobian, b.noise, gate));
+  if (!(layout_.has_wheel_angles() && wheels.angle_rad && ApplyWheelAngles(wheels, result))) {
+    ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
+    WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
+                    config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
+    const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
+    const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
+    b.noise.setZero(m, m);
+    b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
+    b.innovation = z - b.wheels.predicted;
+    result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.wheels.jacobian, b.noise, gate));
+  }
   // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
   WheelLateralVelocityModel(x_, vehicle_, layout_, b.wheels);
   const double l = config_.wheels.lateral_velocity_sigma_mps;
@@ -201,6 +210,41 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   b.innovation = -b.wheels.predicted;
   result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.wheels.jacobian, b.noise, gate));
   return result;
+}
+
+bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result) {
+  const std::size_t n = vehicle_.wheels.size();
+  UpdateBuffers& b = update_buffers_;
+  Eigen::VectorXd& z = b.wheel_angles;
+  z.resize(static_cast<Eigen::Index>(n));
+  for (std::size_t j = 0; j < n; ++j) z(static_cast<Eigen::Index>(wheel_index_[j])) = (*wheels.angle_rad)[j];
+  // No wheel ticked since the last message: at rest the quantization error is frozen, a bias the
+  // angle update would keep integrating (into the pose, through the angles' correlations): the
+  // speeds are used instead.
+  if (wheel_angles_anchored_ && z == last_wheel_angles_) return false;
+  last_wheel_angles_ = z;
+  if (wheel_angles_anchored_) {
+    WheelAngleModel(x_, layout_, b.wheels);
+    const double s = config_.wheels.angle_sigma_rad;
+    b.noise.setZero(z.size(), z.size());
+    b.noise.diagonal().setConstant(s * s);
+    b.innovation = z - b.wheels.predicted;
+    result.updates.push_back(
+        Update(wheels.time_s, "wheel_angles", b.innovation, b.wheels.jacobian, b.noise, wheel_gates_[n - 1]));
+    if (result.updates.back().outcome.accepted) return true;
+    result.notice = "wheel angles gated out at t=" + std::to_string(wheels.time_s) + " s: re-anchored to the encoders";
+  }
+  // Anchor (first angles since initialisation, or after a gated-out update): theta = z with the
+  // quantization variance, uncorrelated with the other states. Only the angle's offset is lost.
+  for (std::size_t i = 0; i < n; ++i) {
+    const int k = layout_.wheel_angle[i];
+    p_.row(k).setZero();
+    p_.col(k).setZero();
+    p_(k, k) = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
+    x_(k) = z(static_cast<Eigen::Index>(i));
+  }
+  wheel_angles_anchored_ = true;
+  return true;
 }
 
 ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {

@@ -73,6 +73,10 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     if (wheels->torque_nm) {
       for (const double torque : *wheels->torque_nm) RequireFinite(message, torque, "torque_nm");
     }
+    if (wheels->angle_rad && wheels->angle_rad->size() != n) Reject(message, "expected " + std::to_string(n) + " wheel angles");
+    if (wheels->angle_rad) {
+      for (const double angle : *wheels->angle_rad) RequireFinite(message, angle, "angle_rad");
+    }
   } else if (const auto* steering = std::get_if<SteeringMessage>(&message)) {
     if (steering->angle_rad.size() != n) Reject(message, "expected " + std::to_string(n) + " steering entries");
     for (const auto& angle : steering->angle_rad) {
@@ -160,6 +164,14 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
     variance.segment<2>(layout_.accel_bias).setConstant(init.accel_bias_sigma_mps2 * init.accel_bias_sigma_mps2);
   }
   p_.diagonal() = variance;
+  if (layout_.slip_aware()) {  // correlated kappas (one terrain)
+    const double covariance = slip.slip_compliance_wheel_correlation * slip.slip_compliance_sigma * slip.slip_compliance_sigma;
+    for (const int a : layout_.slip_compliance) {
+      for (const int b : layout_.slip_compliance) {
+        if (a != b) p_(a, b) = covariance;
+      }
+    }
+  }
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topLeftCorner<3, 3>() = 0.5 * (pose_covariance + pose_covariance.transpose());
@@ -167,6 +179,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   gps_gated_since_s_.reset();
   initialised_ = true;
   anchor_enu_.reset();
+  wheel_angles_anchored_ = false;
 }
 
 void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance) {

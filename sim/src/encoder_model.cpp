@@ -64,6 +64,7 @@ WheelEncoderSample WheelEncoderModel::Measure(double time_s, double true_wheel_r
     }
   }
   sample.cumulative_ticks = cumulative_ticks_;
+  sample.cumulative_angle_rad = static_cast<double>(cumulative_ticks_) * 2.0 * std::numbers::pi / config_.ticks_per_revolution;
   std::normal_distribution<double> normal(0.0, 1.0);
   sample.speed_radps = filtered_speed_radps_ + config_.speed_noise_sigma_radps * normal(rng_);
   return sample;

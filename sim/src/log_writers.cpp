@@ -177,9 +177,11 @@ void SensorLogWriter::Write(const WheelsMessage& m) {
   CheckTime("wheels", m.time_s);
   CheckWheels("wheels", m.speed_radps, true);
   if (!m.torque_nm.empty()) CheckWheels("wheels", m.torque_nm, true);  // all wheels or none
+  if (!m.angle_rad.empty()) CheckWheels("wheels", m.angle_rad, true);
   ordered_json j = MessageStart("wheels", m.time_s);
   j["speed_radps"] = NamedJson("wheels", m.speed_radps);
   if (!m.torque_nm.empty()) j["torque_nm"] = NamedJson("wheels", m.torque_nm);
+  if (!m.angle_rad.empty()) j["angle_rad"] = NamedJson("wheels", m.angle_rad);
   EmitMessage(j.dump(), m.time_s);
 }
 

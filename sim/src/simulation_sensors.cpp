@@ -96,14 +96,16 @@ void SimulationRun::SampleWheels(double time_s) {
   if (previous_wheel_time_s_) {
     for (std::size_t i = 0; i < n; ++i) mean_rate[i] = (mean_rate[i] + truth.wheels[i].wheel_angular_speed_radps) / 6.0;
   }
-  WheelsMessage message{time_s, {}, {}};
+  WheelsMessage message{time_s, {}, {}, {}};
   std::vector<double> readings(n);
   const double torque_sigma = scenario_.torque ? scenario_.torque->noise_sigma_nm : 0.0;
   std::normal_distribution<double> unit_normal;  // std::normal_distribution needs sigma > 0: scaled here
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& name = scenario_.vehicle.wheels[i].name;
-    readings[i] = wheel_encoders_[i].Measure(time_s, mean_rate[i]).speed_radps;
+    const WheelEncoderSample sample = wheel_encoders_[i].Measure(time_s, mean_rate[i]);
+    readings[i] = sample.speed_radps;
     message.speed_radps.emplace_back(name, readings[i]);
+    message.angle_rad.emplace_back(name, sample.cumulative_angle_rad);
     if (scenario_.torque) message.torque_nm.emplace_back(name, truth.wheels[i].torque_nm + torque_sigma * unit_normal(torque_rng_));
   }
   previous_wheel_time_s_ = time_s;

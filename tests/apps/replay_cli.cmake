@@ -17,6 +17,12 @@ add_test(NAME apps.replay_writes_wheel_calibration
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/file_contains.cmake)
 set_tests_properties(apps.replay_writes_wheel_calibration PROPERTIES LABELS apps
                      FIXTURES_REQUIRED "simulate_tiles;replay_tiles")
+# With wheel-angle states (config/filters/wheel-angles.json) the simulated log's encoder angles
+# (angle_rad) make the odometry updates: the replay reports wheel_angles updates.
+rowloc_cli_test(replay_uses_the_wheel_angles ON "updates wheel_angles: [1-9][0-9]+ accepted"
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/config/filters/wheel-angles.json -o ${_replay_out}/tiles-angles.ndjson)
+set_tests_properties(apps.replay_uses_the_wheel_angles PROPERTIES FIXTURES_REQUIRED simulate_tiles)
 # ... and evaluate compares R_w with the truth's rolling radius (tiles: 0.165 m).
 rowloc_cli_test(replay_output_evaluates ON
                 "position, total \\[m\\] +[0-9]+ +0\\.0[0-4].*Rolling radius per wheel.*left_front +[0-9]+ .* 0\\.16500"

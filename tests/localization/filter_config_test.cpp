@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <set>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -47,6 +48,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.max_model_slip, sb.max_model_slip);
   EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
+  EXPECT_EQ(sa.slip_compliance_wheel_correlation, sb.slip_compliance_wheel_correlation);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
   const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
   EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
@@ -73,6 +75,9 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.wheels.gate_probability, b.wheels.gate_probability);
   EXPECT_EQ(a.wheels.max_speed_radps, b.wheels.max_speed_radps);
   EXPECT_EQ(a.wheels.encoder_low_pass_time_constant_s, b.wheels.encoder_low_pass_time_constant_s);
+  EXPECT_EQ(a.wheels.angle_measurement, b.wheels.angle_measurement);
+  EXPECT_EQ(a.wheels.angle_sigma_rad, b.wheels.angle_sigma_rad);
+  EXPECT_EQ(a.wheels.angle_rate_noise_radps_per_sqrt_hz, b.wheels.angle_rate_noise_radps_per_sqrt_hz);
   EXPECT_EQ(a.steering.angle_sigma_rad, b.steering.angle_sigma_rad);
   EXPECT_EQ(a.steering.gate_probability, b.steering.gate_probability);
   EXPECT_EQ(a.vio.position_m, b.vio.position_m);
@@ -151,6 +156,17 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
   EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
 }
 
+TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchAndTheKappaWalk) {
+  // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4).
+  FilterConfig expected;
+  expected.name = "wheel-angles";
+  expected.wheels.angle_measurement = true;
+  expected.slip_aware_odometry.slip_compliance_noise_per_sqrt_m = 0.0;
+  expected.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9999;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("wheel-angles")), expected);
+  EXPECT_FALSE(FilterConfig{}.wheels.angle_measurement);  // the default uses the speeds
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;
@@ -170,7 +186,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 53u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 57u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -259,11 +275,18 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
   EXPECT_THAT(ErrorOf(std::string("{ \"name\": ")), AllOf(HasSubstr("edited.json"), HasSubstr("invalid JSON")));
 }
 
+/// Numeric keys for which 0 is valid: no encoder filter, calibration states that do not drift,
+/// independent wheels' kappas.
+const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
+                                          "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
+                                          "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
+                                          "slip_aware_odometry.slip_compliance_wheel_correlation"};
+
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();
   for (const auto& [path, pointer] : Leaves(base)) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
-    if (path == "wheels.encoder_low_pass_time_constant_s") continue;  // 0 is valid (no filter): below
+    if (kMayBeZero.contains(path)) continue;  // below
     const bool probability = path.ends_with("gate_probability") || path == "slip_aware_odometry.max_model_slip";
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
@@ -288,6 +311,28 @@ TEST(FilterConfig, MapAidedMethodNamesRoundTripAndUnknownOnesAreNamed) {
   edited["map_aided"]["method"] = "ellipsoid";
   EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: map_aided.method: must be \"range\""),
                                      HasSubstr("got \"ellipsoid\"")));
+}
+
+TEST(FilterConfig, ZeroIsValidWhereItMeansNoneButNegativeIsNot) {
+  for (const std::string& path : kMayBeZero) {
+    const auto dot = path.find('.');
+    json edited = DefaultJson();
+    edited[path.substr(0, dot)][path.substr(dot + 1)] = 0.0;
+    EXPECT_NO_THROW(ParseFilterConfig(edited.dump(), "edited.json")) << path;
+    edited[path.substr(0, dot)][path.substr(dot + 1)] = -0.01;
+    EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: " + path)) << path;
+  }
+}
+
+TEST(FilterConfig, WheelCorrelationOfKappaIsBelowOne) {
+  json edited = DefaultJson();
+  edited["slip_aware_odometry"]["slip_compliance_wheel_correlation"] = 0.999;
+  EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").slip_aware_odometry.slip_compliance_wheel_correlation, 0.999);
+  for (const double bad : {1.0, 1.5, -0.5}) {
+    edited["slip_aware_odometry"]["slip_compliance_wheel_correlation"] = bad;
+    EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.slip_compliance_wheel_correlation must be in [0, 1)"))
+        << bad;
+  }
 }
 
 TEST(FilterConfig, EncoderLowPassTimeConstantMayBeZeroButNotNegative) {
@@ -339,8 +384,9 @@ TEST(FilterConfig, ProblemOfInCodeConfigsNamesTheField) {
        [](FilterConfig& c, double v) { c.process_noise.gyro_bias_radps_per_sqrt_hz = v; }},
       {"slip_aware_odometry.slip_compliance_initial",
        [](FilterConfig& c, double v) { c.slip_aware_odometry.slip_compliance_initial = v; }},
-      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
-       [](FilterConfig& c, double v) { c.slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m = v; }},
+      {"slip_aware_odometry.rolling_radius_sigma_m",
+       [](FilterConfig& c, double v) { c.slip_aware_odometry.rolling_radius_sigma_m = v; }},
+      {"wheels.angle_sigma_rad", [](FilterConfig& c, double v) { c.wheels.angle_sigma_rad = v; }},
       {"initialisation.heading_baseline_m", [](FilterConfig& c, double v) { c.initialisation.heading_baseline_m = v; }},
       {"gps.sigma_floor_sbas_m", [](FilterConfig& c, double v) { c.gps.sigma_floor_sbas_m = v; }},
       {"imu.gyro_sigma_radps", [](FilterConfig& c, double v) { c.imu.gyro_sigma_radps = v; }},

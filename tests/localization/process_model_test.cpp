@@ -325,6 +325,41 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
   }
 }
 
+// The wheels' kappas share rho of their random walk: Q(kappa_i, kappa_j) = rho q^2 sqrt(d_i d_j),
+// and Q stays positive semi-definite; rho = 0 leaves them independent.
+TEST(PredictStep, CorrelatedSlipComplianceNoise) {
+  const mapio::VehicleConfig vehicle = mapio::AgrimaroSwerveConfig();
+  const StateLayout layout = StateLayout::For(vehicle, true);
+  for (const double rho : {0.0, 0.5, 0.9999}) {
+    FilterConfig config;
+    config.slip_aware_odometry.slip_compliance_wheel_correlation = rho;
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(L::kVx) = 1.2;
+    x(L::kYawRate) = 0.4;  // the wheels roll different distances
+    Eigen::MatrixXd p = Eigen::MatrixXd::Zero(layout.size, layout.size);  // the increment is Q
+    PredictStep(vehicle, layout, config, x, p, 0.05);
+    const double q2 = config.slip_aware_odometry.slip_compliance_noise_per_sqrt_m *
+                      config.slip_aware_odometry.slip_compliance_noise_per_sqrt_m;
+    const std::size_t n = vehicle.wheels.size();
+    Eigen::MatrixXd kappa(n, n);
+    for (std::size_t a = 0; a < n; ++a) {
+      for (std::size_t b = 0; b < n; ++b) kappa(a, b) = p(layout.slip_compliance[a], layout.slip_compliance[b]);
+    }
+    for (std::size_t a = 0; a < n; ++a) {
+      const double da = kappa(a, a) / q2;  // the distance wheel a rolled
+      EXPECT_GT(da, 0.0);
+      for (std::size_t b = 0; b < n; ++b) {
+        if (a == b) continue;
+        const double db = kappa(b, b) / q2;
+        EXPECT_NEAR(kappa(a, b), rho * q2 * std::sqrt(da * db), 1e-15) << rho;
+        EXPECT_EQ(kappa(a, b), kappa(b, a));
+      }
+    }
+    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(kappa).eigenvalues().minCoeff(), -1e-18);
+    EXPECT_EQ(p(layout.rolling_radius[0], layout.rolling_radius[1]), 0.0);  // the radii stay independent
+  }
+}
+
 TEST(PredictStep, WrapsTheHeading) {
   const mapio::VehicleConfig vehicle = mapio::DifferentialDriveConfig();
   const StateLayout layout = StateLayout::For(vehicle, false);

@@ -312,11 +312,24 @@ TEST(SensorLogReaderErrors, UnknownWheelOrSensor) {
             "test.ndjson:2: sensor: unknown ultrasonic sensor \"us_right\" (the log header lists us_left)");
 }
 
+TEST(SensorLogReader, ReadsTheEncodersCumulativeAngles) {
+  const ReadLog log = ReadText(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":2},)"
+                                    R"("angle_rad":{"right":-3.5,"left":1250.25}})",
+                                    R"({"type":"wheels","t":2,"speed_radps":{"left":1,"right":2}})"}));
+  const std::vector<WheelsMessage> wheels = All<WheelsMessage>(log);
+  ASSERT_EQ(wheels.size(), 2u);
+  ASSERT_TRUE(wheels[0].angle_rad.has_value());
+  EXPECT_EQ(*wheels[0].angle_rad, (std::vector<double>{1250.25, -3.5}));  // header order: left, right
+  EXPECT_FALSE(wheels[1].angle_rad.has_value());                        // optional per message
+}
+
 TEST(SensorLogReaderErrors, MissingWheel) {
   EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1}})"})),
             "test.ndjson:2: speed_radps.right: missing (every wheel of the log header must appear in speed_radps)");
   EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":1},"torque_nm":{"right":2}})"})),
             "test.ndjson:2: torque_nm.left: missing (every wheel of the log header must appear in torque_nm)");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":1},"angle_rad":{"left":2}})"})),
+            "test.ndjson:2: angle_rad.right: missing (every wheel of the log header must appear in angle_rad)");
 }
 
 TEST(SensorLogReaderErrors, TimeGoingBackwards) {

@@ -109,7 +109,7 @@ struct Rig {
   }
   GpsMessage Gps() const { return {t, "gnss", GnssFixQuality::kRtkFixed, GpsPosition{45.0628, 7.6621, 240.0, 0.01, 0.02}}; }
   ImuMessage Imu() const { return {t, "imu", 0.0, 0.0, 0.0}; }
-  WheelsMessage Wheels() const { return {t, std::vector<double>(v.wheels.size(), 6.0), std::vector<double>(v.wheels.size(), 2.0)}; }
+  WheelsMessage Wheels() const { return {t, std::vector<double>(v.wheels.size(), 6.0), std::vector<double>(v.wheels.size(), 2.0), std::nullopt}; }
   SteeringMessage Steering() const { return {t, std::vector<std::optional<double>>(v.wheels.size(), 0.0)}; }
   VioMessage Vio() const { return {t, "camera", 1.0, 0.0, 0.02}; }
   UltrasonicMessage Ultrasonic() const { return {t, "us", 0, 1.0}; }
@@ -420,6 +420,26 @@ TEST(VehicleEkfWheels, SlipComplianceStaysInItsDomain) {
   }
   EXPECT_GT(driving_updates, 100u);  // the bound was checked after accepted updates at high traction
   EXPECT_TRUE(ekf.covariance().allFinite());
+}
+
+// slip_compliance_wheel_correlation: the initial kappas of two wheels have covariance rho sigma^2.
+TEST(VehicleEkfWheels, InitialSlipCompliancesAreCorrelated) {
+  const VehicleConfig v = mapio::AgrimaroSwerveConfig();
+  for (const double rho : {0.0, 0.9}) {
+    FilterConfig config;
+    config.slip_aware_odometry.slip_compliance_wheel_correlation = rho;
+    VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
+    ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+    const StateLayout& layout = ekf.layout();
+    const double variance = config.slip_aware_odometry.slip_compliance_sigma * config.slip_aware_odometry.slip_compliance_sigma;
+    for (const int a : layout.slip_compliance) {
+      for (const int b : layout.slip_compliance) {
+        EXPECT_DOUBLE_EQ(ekf.covariance()(a, b), a == b ? variance : rho * variance) << rho;
+      }
+    }
+    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance().bottomRightCorner(layout.size - 3, layout.size - 3)).info(),
+              Eigen::Success);
+  }
 }
 
 }  // namespace

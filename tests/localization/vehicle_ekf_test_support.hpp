@@ -72,7 +72,7 @@ Pose Advance(const Pose& a, const Segment& s, double t) {
 struct Readings { ImuMessage imu; SteeringMessage steering; WheelsMessage wheels; };
 Readings Exact(const VehicleConfig& v, const Segment& s, double t) {
   const Eigen::Vector2d l = v.imu.position_m.head<2>();
-  Readings r{{t, "imu", -s.r * s.vy - s.r * s.r * l.x(), s.r * s.vx - s.r * s.r * l.y(), s.r}, {t, {}}, {t, {}, {}}};
+  Readings r{{t, "imu", -s.r * s.vy - s.r * s.r * l.x(), s.r * s.vx - s.r * s.r * l.y(), s.r}, {t, {}}, {t, {}, {}, {}}};
   for (const auto& w : v.wheels) {
     const Eigen::Vector2d c(s.vx - s.r * w.position_m.y(), s.vy + s.r * w.position_m.x());
     double delta = w.steerable ? std::atan2(c.y(), c.x()) : 0.0, speed = w.steerable ? c.norm() : c.x();

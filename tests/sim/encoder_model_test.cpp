@@ -42,6 +42,10 @@ TEST(WheelEncoderModel, NoTickIsLostAndEachSampleIsWithinOneTick) {
     error_sum += error;
     // The cumulative count is the whole part of the true tick count (up to round-off at an edge).
     ASSERT_LE(std::abs(static_cast<double>(s.cumulative_ticks) - std::floor(true_ticks)), 1.0);
+    // The reported angle is the count times the tick angle: at most one tick behind the truth.
+    ASSERT_DOUBLE_EQ(s.cumulative_angle_rad, static_cast<double>(s.cumulative_ticks) / ticks_per_rad);
+    ASSERT_LE(true_ticks / ticks_per_rad - s.cumulative_angle_rad, 1.0 / ticks_per_rad + 1e-9);
+    ASSERT_GE(true_ticks / ticks_per_rad - s.cumulative_angle_rad, -1e-9);
   }
   // Zero mean: the errors telescope to the carried remainder, under one tick in total.
   EXPECT_LT(std::abs(error_sum), 1.0 / (ticks_per_rad * dt) + 1e-6);

@@ -38,7 +38,7 @@ TEST(SensorLogWriter, WritesHeaderThenMessagesInDocumentedKeyOrder) {
   std::ostringstream out;
   SensorLogWriter writer(out, TwoWheelHeader());
   writer.Write(ImuMessage{0.01, "imu", 0.1, -0.2, 0.003});
-  writer.Write(WheelsMessage{0.02, {{"left", 1.5}, {"right", 1.6}}, {}});
+  writer.Write(WheelsMessage{0.02, {{"left", 1.5}, {"right", 1.6}}, {}, {}});
   writer.Write(UltrasonicMessage{0.03, "us_left", std::nullopt});
   writer.Write(UltrasonicMessage{0.04, "us_left", 1.25});
   const std::vector<json> lines = Lines(out.str());
@@ -49,6 +49,7 @@ TEST(SensorLogWriter, WritesHeaderThenMessagesInDocumentedKeyOrder) {
   EXPECT_EQ(lines[1]["gyro_z_radps"].get<double>(), 0.003);
   EXPECT_EQ(lines[2]["speed_radps"]["right"].get<double>(), 1.6);
   EXPECT_FALSE(lines[2].contains("torque_nm"));
+  EXPECT_FALSE(lines[2].contains("angle_rad"));
   EXPECT_TRUE(lines[3]["range_m"].is_null());
   EXPECT_EQ(lines[4]["range_m"].get<double>(), 1.25);
   EXPECT_EQ(writer.messages_written(), 4u);
@@ -99,11 +100,15 @@ TEST(SensorLogWriter, RefusesWhatTheProtocolForbidsAndWritesNothingForIt) {
   EXPECT_THROW(writer.Write(ImuMessage{3.0, "imu", std::nan(""), 0, 0}), std::invalid_argument);
   EXPECT_THROW(writer.Write(ImuMessage{std::numeric_limits<double>::infinity(), "imu", 0, 0, 0}),
                std::invalid_argument);
-  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}}, {}}), std::invalid_argument);  // missing wheel
-  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"middle", 1.0}}, {}}), std::invalid_argument);
-  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"left", 1.0}}, {}}), std::invalid_argument);  // twice
-  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"right", 1.0}}, {{"left", 2.0}}}),
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}}, {}, {}}), std::invalid_argument);  // missing wheel
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"middle", 1.0}}, {}, {}}), std::invalid_argument);
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"left", 1.0}}, {}, {}}), std::invalid_argument);  // twice
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"right", 1.0}}, {{"left", 2.0}}, {}}),
                std::invalid_argument);  // torque for only some wheels
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"right", 1.0}}, {}, {{"right", 2.0}}}),
+               std::invalid_argument);  // angles for only some wheels
+  EXPECT_THROW(writer.Write(WheelsMessage{3.0, {{"left", 1.0}, {"right", 1.0}}, {}, {{"left", 2.0}, {"right", std::nan("")}}}),
+               std::invalid_argument);  // a non-finite angle
   EXPECT_THROW(writer.Write(SteeringMessage{3.0, {{"nose", 0.1}}}), std::invalid_argument);
   EXPECT_THROW(writer.Write(SteeringMessage{3.0, {{"left", 0.1}, {"left", 0.2}}}), std::invalid_argument);
   EXPECT_THROW(writer.Write(UltrasonicMessage{3.0, "us_right", 1.0}), std::invalid_argument);

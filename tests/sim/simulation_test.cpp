@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <numeric>
 #include <set>
 #include <sstream>
@@ -174,6 +175,22 @@ TEST(SimulationTest, EncodersAverageToTheTrueWheelSpeedAndTruthFollowsTheRoute) 
     const double mean_exact = exact[name].first / exact[name].second;
     EXPECT_NEAR(mean_measured, mean_exact, 0.01) << name;  // one tick over 11 s is 0.0006 rad/s
     EXPECT_GT(mean_exact, 1.0 / 0.165) << "driving wheels turn faster than v / R on tiles (slip > 0)";
+  }
+  // The cumulative angles (angle_rad): what each wheel turned between two messages, to a tick plus the
+  // truth's sampling (rectangle rule over 50 Hz samples of a constant rate).
+  std::map<std::string, double> angle_at_4s, angle_at_15s;
+  for (const json& w : Lines(s->sensors.str(), "wheels")) {
+    ASSERT_TRUE(w.contains("angle_rad"));
+    const double t = w["t"].get<double>();
+    for (const auto& [name, value] : w["angle_rad"].items()) {
+      if (std::abs(t - 4.0) < 1e-9) angle_at_4s[name] = value.get<double>();
+      if (std::abs(t - 15.0) < 1e-9) angle_at_15s[name] = value.get<double>();
+    }
+  }
+  ASSERT_EQ(angle_at_15s.size(), 3u);
+  for (const auto& [name, angle] : angle_at_15s) {
+    const double turned = exact[name].first / exact[name].second * 11.0;
+    EXPECT_NEAR(angle - angle_at_4s.at(name), turned, 2.0 * std::numbers::pi / 1024.0 + 0.05) << name;
   }
 }
 

@@ -54,6 +54,10 @@ struct SlipAwareOdometryConfig {
   double max_model_slip = 0.9;                      ///< kappa is clamped so that kappa mu <= this, in (0, 1)
   double rolling_radius_noise_m_per_sqrt_m = 1e-5;  ///< R_w random walk per sqrt(metre rolled)
   double slip_compliance_noise_per_sqrt_m = 0.003;  ///< kappa random walk per sqrt(metre rolled)
+  /// Correlation rho in [0, 1) of the kappas of two wheels, in their initial covariance and in
+  /// their random walk (wheels of one vehicle roll on one terrain): the difference of two wheels'
+  /// kappas has (1 - rho) times the variance of independent ones (docs/localization-filter.md §5.4).
+  double slip_compliance_wheel_correlation = 0.0;
   /// Wheels messages without torques: the traction coefficient from the acceleration state
   /// (measurement_models.hpp) instead of 0.
   bool traction_from_acceleration = true;
@@ -108,6 +112,15 @@ struct WheelNoise {
   /// reports omega(t - tau) to first order, which lags by tau d omega / dt when the vehicle brakes
   /// or accelerates (WheelSpeedModel). The simulated encoders (config/sensors.json) use 0.02 s.
   double encoder_low_pass_time_constant_s = 0.0;
+  /// Use the encoders' cumulative angles (wheels message `angle_rad`) instead of their speeds:
+  /// one wheel-angle state per wheel (wheel_angle_model.hpp; docs/localization-filter.md §5.4).
+  /// A wheels message without angles is still used as speeds.
+  bool angle_measurement = false;
+  /// Per wheel, per sample: the tick angle over sqrt(12) (uniform quantization); 1024 ticks per
+  /// revolution: 2 pi / 1024 / sqrt(12) = 1.77e-3 rad.
+  double angle_sigma_rad = 1.77e-3;
+  /// White noise on theta' = omega(x): the wheel-rate model's error, rad/s/sqrt(Hz).
+  double angle_rate_noise_radps_per_sqrt_hz = 1e-3;
 };
 
 struct SteeringNoise {

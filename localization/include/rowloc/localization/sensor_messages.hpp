@@ -67,6 +67,9 @@ struct WheelsMessage {
   double time_s = 0.0;
   std::vector<double> speed_radps;               ///< one per header wheel
   std::optional<std::vector<double>> torque_nm;  ///< absent: no torque sensing; else one per header wheel
+  /// Absent: no angle output; else one per header wheel: the encoder's cumulative rotation (rad,
+  /// counted ticks times the tick angle; any zero), the measurement of the wheel-angle states.
+  std::optional<std::vector<double>> angle_rad;
 };
 
 /// Steering-encoder angles (body frame, 0 = straight ahead, positive to the left) in the header's

@@ -15,6 +15,8 @@
 //   then, with slip-aware odometry, per wheel in config order: R_<wheel> (m), k_<wheel> (N m)
 //   then, with accelerometer-bias estimation: bax_mps2, bay_mps2 (m/s^2): what the IMU reads on top
 //   of the body acceleration, chiefly gravity on sloped ground (the planar filter has no attitude)
+//   then, with wheel-angle measurements, per wheel in config order: theta_<wheel> (rad), the
+//   wheel's cumulative rotation (wheel_angle_model.hpp)
 // Seed 000 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
 // gyro bias is moved before the steering angles here so that the base block has the same indices
 // for every vehicle kind (a swerve robot has 3 steering states, a 4WS vehicle 4, the others none).
@@ -37,17 +39,20 @@ struct StateLayout {
   std::vector<int> rolling_radius;  ///< per wheel: index of R_w, or -1 (no slip-aware odometry)
   std::vector<int> slip_compliance;  ///< per wheel: index of kappa (slip per unit traction), or -1
   int accel_bias = -1;              ///< index of b_ax (b_ay follows), or -1 (not estimated)
+  std::vector<int> wheel_angle;     ///< per wheel: index of theta, or -1 (no wheel-angle measurement)
   int size = kBaseSize;
 
   /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
   /// a rolling radius and a slip compliance per wheel (or track).
-  /// With accel_bias, two accelerometer-bias states at the end.
-  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false);
+  /// With accel_bias, two accelerometer-bias states; then with wheel_angles one angle per wheel.
+  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false,
+                         bool wheel_angles = false);
 
   /// Names of the states in index order, e.g. "x_m", "delta_front", "R_rear_left" (for messages).
   std::vector<std::string> Names(const mapio::VehicleConfig& vehicle) const;
   std::size_t wheel_count() const { return steering.size(); }
   bool slip_aware() const { return !rolling_radius.empty() && rolling_radius.front() >= 0; }
+  bool has_wheel_angles() const { return !wheel_angle.empty() && wheel_angle.front() >= 0; }
 };
 
 }  // namespace rowloc::localization

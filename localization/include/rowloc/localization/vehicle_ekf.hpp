@@ -132,6 +132,11 @@ class VehicleEkf {
   ProcessResult Apply(const GpsMessage& gps);
   ProcessResult Apply(const ImuMessage& imu);
   ProcessResult Apply(const WheelsMessage& wheels);
+  /// The wheel-angle update of a wheels message with angles (wheel_angle_model.hpp); anchors the
+  /// angle states to the message instead when they are not anchored yet or the update is gated out.
+  /// Returns false, and does nothing, when no wheel ticked since the last message (the vehicle is
+  /// at rest: the caller uses the speeds).
+  bool ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result);
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
@@ -164,6 +169,8 @@ class VehicleEkf {
   Eigen::MatrixXd p_;
   std::optional<double> gps_gated_since_s_;   ///< first gated fix since the last accepted one
   std::optional<Eigen::Vector2d> anchor_enu_;  ///< first antenna fix while waiting for the heading
+  bool wheel_angles_anchored_ = false;         ///< the wheel-angle states hold the encoders' angles
+  Eigen::VectorXd last_wheel_angles_;          ///< the last wheels message's angles, vehicle order
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
   /// The last wheels message's torques, vehicle order; none when it carried none.
   std::optional<std::vector<double>> last_torque_nm_;
@@ -176,6 +183,8 @@ class VehicleEkf {
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
     LinearizedMeasurement gnss, imu, wheels, steering, vio;
+    LinearizedMeasurement wheel_rates;  ///< omega(x) and J of the wheel-angle prediction
+    Eigen::VectorXd wheel_angles;       ///< measured angles, vehicle order
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle

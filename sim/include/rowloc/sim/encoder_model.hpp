@@ -11,6 +11,8 @@
 //    discretised exactly for a piecewise-constant input (zero-order hold):
 //    y_k = y_{k-1} + (1 - exp(-dt / tau)) (q_k - y_{k-1}); tau = 0 disables the filter.
 //  - Optional additive Gaussian noise of sigma s on the output: z_k = y_k + s e_k.
+//  - The cumulative count times the tick angle, (c_1 + ... + c_k) 2 pi / n, is reported too (the
+//    wheels message's `angle_rad`): true angle minus a fraction of a tick, no filter, no noise.
 // Steering encoder: z = step * round((delta + s e) / step) (noise on the analogue angle, then the
 // quantizer; step = 0 disables quantization). The quantization error is uniform on
 // [-step/2, step/2] (variance step^2 / 12) when the angle varies over many steps.
@@ -37,6 +39,9 @@ struct WheelEncoderSample {
   std::int64_t cumulative_ticks = 0;  ///< sum of tick_count since the first sample
   double quantized_speed_radps = 0.0; ///< q_k, before the filter
   double speed_radps = 0.0;           ///< z_k, the measurement
+  /// c_1 + ... + c_k times the tick angle 2 pi / n: the angle the counter reports (no filter, no
+  /// noise); it lags the true angle by the carried fraction, in [0, 1) tick.
+  double cumulative_angle_rad = 0.0;
 };
 
 class WheelEncoderModel {

@@ -57,6 +57,7 @@ struct WheelsMessage {
   double time_s = 0.0;
   NamedValues speed_radps;  ///< every wheel of the header
   NamedValues torque_nm;    ///< optional: empty means "no torque sensor"
+  NamedValues angle_rad;    ///< optional: the encoders' cumulative angle (ticks x tick angle), every wheel or none
 };
 
 struct SteeringMessage {
