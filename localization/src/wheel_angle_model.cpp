@@ -7,18 +7,23 @@ namespace rowloc::localization {
 
 void PropagateWheelAngles(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
                           const std::optional<std::vector<double>>& torque_nm, Eigen::VectorXd& x,
-                          Eigen::MatrixXd& p, double dt_s, LinearizedMeasurement& scratch) {
+                          Eigen::MatrixXd& p, double dt_s, WheelAngleScratch& scratch) {
   if (!layout.has_wheel_angles()) return;
   WheelSpeedModel(x, vehicle, layout, torque_nm, /*encoder_lag_s=*/0.0,
-                  config.slip_aware_odometry.traction_from_acceleration, scratch);
-  const Eigen::MatrixXd& j = scratch.jacobian;
+                  config.slip_aware_odometry.traction_from_acceleration, scratch.rates);
+  const Eigen::MatrixXd& j = scratch.rates.jacobian;
   const std::vector<int>& theta = layout.wheel_angle;
-  const Eigen::MatrixXd m = dt_s * (j * p);  // wheels x states
-  const Eigen::MatrixXd corner = dt_s * (m * j.transpose());
+  Eigen::MatrixXd& m = scratch.m;
+  m.noalias() = j * p;  // wheels x states
+  m *= dt_s;
+  Eigen::MatrixXd& corner = scratch.corner;
+  corner.noalias() = m * j.transpose();
+  corner *= dt_s;
   const auto n = static_cast<Eigen::Index>(layout.wheel_count());
   // The angle block: P_ab + M(a, theta_b) + M(b, theta_a) + dt (M J^T)(a, b), written to both
   // triangles from one sum so that P stays exactly symmetric.
-  Eigen::MatrixXd block(n, n);
+  Eigen::MatrixXd& block = scratch.block;
+  block.resize(n, n);
   const double q2 = config.wheels.angle_rate_noise_radps_per_sqrt_hz * config.wheels.angle_rate_noise_radps_per_sqrt_hz;
   for (Eigen::Index a = 0; a < n; ++a) {
     for (Eigen::Index b = 0; b <= a; ++b) {
@@ -27,7 +32,8 @@ void PropagateWheelAngles(const mapio::VehicleConfig& vehicle, const StateLayout
     }
     block(a, a) += q2 * dt_s;
   }
-  // The other entries of the angle rows and columns: + M (rows) and + M^T (columns).
+  // The other entries of the angle rows and columns: + M (rows) and + M^T (columns); the angle
+  // block is then overwritten.
   for (Eigen::Index a = 0; a < n; ++a) {
     const int ta = theta[static_cast<std::size_t>(a)];
     p.row(ta) += m.row(a);
@@ -35,7 +41,7 @@ void PropagateWheelAngles(const mapio::VehicleConfig& vehicle, const StateLayout
   }
   for (Eigen::Index a = 0; a < n; ++a) {
     for (Eigen::Index b = 0; b < n; ++b) p(theta[static_cast<std::size_t>(a)], theta[static_cast<std::size_t>(b)]) = block(a, b);
-    x(theta[static_cast<std::size_t>(a)]) += dt_s * scratch.predicted(a);
+    x(theta[static_cast<std::size_t>(a)]) += dt_s * scratch.rates.predicted(a);
   }
 }
 

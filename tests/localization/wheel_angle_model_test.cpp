@@ -93,7 +93,7 @@ TEST(PropagateWheelAngles, CovarianceStepIsTheCongruenceWithTheStepsJacobian) {
         const std::optional<std::vector<double>> torques =
             trial % 2 == 0 ? std::optional<std::vector<double>>(RandomTorques(vehicle, rng)) : std::nullopt;
         const double dt = 0.02;
-        LinearizedMeasurement scratch;
+        WheelAngleScratch scratch;
         const auto step = [&](Eigen::VectorXd& x) {
           Eigen::MatrixXd unused = Eigen::MatrixXd::Zero(layout.size, layout.size);
           PropagateWheelAngles(vehicle, layout, config, torques, x, unused, dt, scratch);
@@ -135,7 +135,7 @@ TEST(PropagateWheelAngles, FollowedByTheBaseStepPropagatesWithTheFullJacobian) {
       const Eigen::VectorXd x0 = RandomState(vehicle, layout, rng);
       const std::optional<std::vector<double>> torques = RandomTorques(vehicle, rng);
       const double dt = 0.015;
-      LinearizedMeasurement scratch;
+      WheelAngleScratch scratch;
       const auto full_step = [&](Eigen::VectorXd& x, Eigen::MatrixXd& p) {
         PropagateWheelAngles(vehicle, layout, config, torques, x, p, dt, scratch);
         PredictStep(vehicle, layout, config, x, p, dt);
@@ -167,7 +167,7 @@ TEST(PropagateWheelAngles, DoesNothingWithoutAngleStates) {
   const Eigen::VectorXd x0 = x;
   Eigen::MatrixXd p = test::RandomSpd(layout.size, rng, 1e-3);
   const Eigen::MatrixXd p0 = p;
-  LinearizedMeasurement scratch;
+  WheelAngleScratch scratch;
   PropagateWheelAngles(vehicle, layout, FilterConfig{}, std::nullopt, x, p, 0.02, scratch);
   EXPECT_EQ(x, x0);
   EXPECT_EQ(p, p0);

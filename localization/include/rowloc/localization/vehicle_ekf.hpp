@@ -30,6 +30,7 @@
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/sensor_messages.hpp"
 #include "rowloc/localization/state_layout.hpp"
+#include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
@@ -183,7 +184,7 @@ class VehicleEkf {
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
     LinearizedMeasurement gnss, imu, wheels, steering, vio;
-    LinearizedMeasurement wheel_rates;  ///< omega(x) and J of the wheel-angle prediction
+    WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
     Eigen::VectorXd wheel_angles;       ///< measured angles, vehicle order
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;

@@ -36,13 +36,22 @@
 
 namespace rowloc::localization {
 
+/// Working memory of PropagateWheelAngles, reused so that a prediction step allocates nothing once
+/// the sizes repeat (no state: its contents are scratch).
+struct WheelAngleScratch {
+  LinearizedMeasurement rates;  ///< omega(x) and J
+  Eigen::MatrixXd m;            ///< dt J P, wheels x states
+  Eigen::MatrixXd corner;       ///< dt M J^T, wheels x wheels
+  Eigen::MatrixXd block;        ///< the new angle block of P
+};
+
 /// One prediction step of the wheel-angle states over dt_s >= 0 (state and covariance, with their
 /// process noise), to be followed by PredictStep over the same dt_s. torque_nm: the last wheels
-/// message's torques (vehicle order) or none, as for WheelSpeedModel. `scratch` receives omega(x)
-/// and J. Does nothing when the layout has no wheel-angle states.
+/// message's torques (vehicle order) or none, as for WheelSpeedModel. Does nothing when the layout
+/// has no wheel-angle states.
 void PropagateWheelAngles(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
                           const std::optional<std::vector<double>>& torque_nm, Eigen::VectorXd& x,
-                          Eigen::MatrixXd& p, double dt_s, LinearizedMeasurement& scratch);
+                          Eigen::MatrixXd& p, double dt_s, WheelAngleScratch& scratch);
 
 /// h = (theta_1, ..., theta_n) in vehicle order; H the matching unit rows. std::invalid_argument
 /// when the layout has no wheel-angle states.
