@@ -15,7 +15,10 @@
 // for a constant-speed arc to O(dt^3)). F = df/dx is analytic (tested against central differences).
 // Process noise: Q = diag(q_v^2, q_v^2, q_r^2, q_a^2, q_a^2, q_b^2, q_delta^2 ...) dt on
 // (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states of seed 004 (text after eq. (41)) a variance
-// growing with the distance d_i = |v_i| dt wheel i rolled in the step: q_R^2 d_i, q_k^2 d_i.
+// growing with the distance d_i = |v_i| dt wheel i rolled in the step: q_R^2 d_i, q_k^2 d_i, the
+// kappas of wheels i != j sharing rho q_k^2 sqrt(d_i d_j) (slip_compliance_wheel_correlation rho: one
+// terrain under all wheels). The wheel-angle states, when the layout has them, are propagated by
+// wheel_angle_model.hpp before this step.
 // F is the identity outside the 9 base states and sparse inside them (15 off-diagonal entries):
 // P <- F P F^T is computed as column then row operations on the coupled states only, O(nnz n).
 #pragma once

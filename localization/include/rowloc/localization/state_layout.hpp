@@ -12,7 +12,8 @@
 //   7    ay_mps2      m/s^2    body-frame acceleration (a_By)
 //   8    bg_radps     rad/s    gyro bias (b_g)
 //   then, per steerable wheel in vehicle-config order:        delta_<wheel> (rad)
-//   then, with slip-aware odometry, per wheel in config order: R_<wheel> (m), k_<wheel> (N m)
+//   then, with slip-aware odometry, per wheel in config order: R_<wheel> (m), kappa_<wheel> (slip
+//   per unit traction coefficient, dimensionless)
 //   then, with accelerometer-bias estimation: bax_mps2, bay_mps2 (m/s^2): what the IMU reads on top
 //   of the body acceleration, chiefly gravity on sloped ground (the planar filter has no attitude)
 //   then, with wheel-angle measurements, per wheel in config order: theta_<wheel> (rad), the
