@@ -44,6 +44,8 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.max_model_slip", s.max_model_slip, Domain::kProbability},
       {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, Domain::kNonNegative},
       {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, Domain::kNonNegative},
+      {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
+      {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
       {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
       {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps},
@@ -108,7 +110,8 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Number("slip_compliance_initial"), s.Number("slip_compliance_sigma"),
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
                              s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
-                             s.Bool("traction_from_acceleration")};
+                             s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
+                             s.Number("traction_noise_per_sqrt_s")};
     s.RejectUnknownKeys();
   }
   {

@@ -92,6 +92,7 @@ double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleCo
   if (torque_nm && torque_nm->size() != vehicle.wheels.size()) {
     throw std::invalid_argument("traction coefficient: one torque per wheel");
   }
+  if (torque_nm && layout.traction[i] >= 0) return x(layout.traction[i]);
   if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
   if (!from_acceleration) return 0.0;
   const WheelCentre w = CentreOf(x, vehicle, layout, i);
@@ -120,12 +121,15 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     double dh_dmu = 0.0;    // of a traction from the acceleration (0 with torques)
     if (layout.slip_aware()) {
       const double kappa = x(layout.slip_compliance[i]);
-      const double mu = torque_nm                    ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i)
+      const bool mu_state = torque_nm && layout.traction[i] >= 0;  // the torques measure the state mu
+      const double mu = mu_state                     ? x(layout.traction[i])
+                        : torque_nm                  ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i)
                         : traction_from_acceleration ? TractionFromAcceleration(x, w)
                                                      : 0.0;
       gain = 1.0 / (1.0 - kappa * mu);
       m.jacobian(row, layout.slip_compliance[i]) = v / radius * mu * gain * gain;
       m.jacobian(row, layout.rolling_radius[i]) = -v * gain / (radius * radius);
+      if (mu_state) m.jacobian(row, layout.traction[i]) = v / radius * kappa * gain * gain;
       if (!torque_nm && traction_from_acceleration) dh_dmu = v / radius * kappa * gain * gain;
     }
     const double dv = gain / radius;  // d h / d v

@@ -80,6 +80,10 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
     if (layout.steering[i] >= 0) p(layout.steering[i], layout.steering[i]) += steering;
   }
   if (!layout.slip_aware()) return;
+  if (layout.has_traction()) {
+    const double traction = s.traction_noise_per_sqrt_s * s.traction_noise_per_sqrt_s * dt;
+    for (const int k : layout.traction) p(k, k) += traction;
+  }
   // kappa: q^2 sqrt(d_i d_j) (rho off the diagonal): Q = q^2 D^1/2 C D^1/2, C the correlation matrix.
   const double kappa_q2 = s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m;
   const double rho = s.slip_compliance_wheel_correlation;

@@ -3,13 +3,14 @@
 namespace rowloc::localization {
 
 StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias,
-                             bool wheel_angles) {
+                             bool wheel_angles, bool traction) {
   StateLayout layout;
   const std::size_t n = vehicle.wheels.size();
   layout.steering.assign(n, -1);
   layout.rolling_radius.assign(n, -1);
   layout.slip_compliance.assign(n, -1);
   layout.wheel_angle.assign(n, -1);
+  layout.traction.assign(n, -1);
   int next = kBaseSize;
   for (std::size_t i = 0; i < n; ++i) {
     if (vehicle.wheels[i].steerable) layout.steering[i] = next++;
@@ -27,6 +28,9 @@ StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_awar
   if (wheel_angles) {
     for (std::size_t i = 0; i < n; ++i) layout.wheel_angle[i] = next++;
   }
+  if (traction && slip_aware_odometry) {
+    for (std::size_t i = 0; i < n; ++i) layout.traction[i] = next++;
+  }
   layout.size = next;
   return layout;
 }
@@ -41,6 +45,7 @@ std::vector<std::string> StateLayout::Names(const mapio::VehicleConfig& vehicle)
     if (rolling_radius[i] >= 0) names[static_cast<std::size_t>(rolling_radius[i])] = "R_" + wheel;
     if (slip_compliance[i] >= 0) names[static_cast<std::size_t>(slip_compliance[i])] = "kappa_" + wheel;
     if (wheel_angle[i] >= 0) names[static_cast<std::size_t>(wheel_angle[i])] = "theta_" + wheel;
+    if (traction[i] >= 0) names[static_cast<std::size_t>(traction[i])] = "mu_" + wheel;
   }
   if (accel_bias >= 0) {
     names[static_cast<std::size_t>(accel_bias)] = "bax_mps2";

@@ -60,7 +60,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
     : vehicle_(Checked(std::move(vehicle))),
       config_(Checked(std::move(config))),
       layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled, config_.imu.estimate_accel_bias,
-                               config_.wheels.angle_measurement)),
+                               config_.wheels.angle_measurement, config_.slip_aware_odometry.torque_sigma_nm > 0.0)),
       frame_(origin),
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
@@ -191,6 +191,7 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   UpdateBuffers& b = update_buffers_;
   const auto m = static_cast<Eigen::Index>(n);
   const double gate = wheel_gates_[n - 1];
+  if (layout_.has_traction() && wheels.torque_nm) ApplyTorques(wheels.time_s, result);
   if (!(layout_.has_wheel_angles() && wheels.angle_rad && ApplyWheelAngles(wheels, result))) {
     ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
     WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
@@ -210,6 +211,37 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   b.innovation = -b.wheels.predicted;
   result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.wheels.jacobian, b.noise, gate));
   return result;
+}
+
+void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {
+  const std::size_t n = vehicle_.wheels.size();
+  UpdateBuffers& b = update_buffers_;
+  const auto m = static_cast<Eigen::Index>(n);
+  b.torque.predicted.resize(m);
+  b.torque.jacobian.setZero(m, layout_.size);
+  b.innovation.resize(m);
+  b.noise.setZero(m, m);
+  const double sigma_nm = config_.slip_aware_odometry.torque_sigma_nm;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    const double scale = WheelTractionScaleNm(vehicle_, i);
+    b.torque.predicted(row) = x_(layout_.traction[i]);
+    b.torque.jacobian(row, layout_.traction[i]) = 1.0;
+    b.innovation(row) = (*last_torque_nm_)[i] / scale - b.torque.predicted(row);
+    b.noise(row, row) = (sigma_nm / scale) * (sigma_nm / scale);
+  }
+  result.updates.push_back(Update(time_s, "torque", b.innovation, b.torque.jacobian, b.noise, wheel_gates_[n - 1]));
+  if (result.updates.back().outcome.accepted) return;
+  // A torque step (the drive changed its command): the traction states jump to the measurement,
+  // uncorrelated with the rest; the smoothing starts again from there.
+  for (std::size_t i = 0; i < n; ++i) {
+    const int k = layout_.traction[i];
+    const double variance = b.noise(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
+    p_.row(k).setZero();
+    p_.col(k).setZero();
+    p_(k, k) = variance;
+    x_(k) = (*last_torque_nm_)[i] / WheelTractionScaleNm(vehicle_, i);
+  }
 }
 
 bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result) {

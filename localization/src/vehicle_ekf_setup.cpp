@@ -163,6 +163,14 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   if (layout_.accel_bias >= 0) {
     variance.segment<2>(layout_.accel_bias).setConstant(init.accel_bias_sigma_mps2 * init.accel_bias_sigma_mps2);
   }
+  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {  // traction: the last torques, if any
+    if (const int k = layout_.traction[i]; k >= 0) {
+      const double scale = WheelTractionScaleNm(vehicle_, i);
+      const double sigma = slip.torque_sigma_nm / scale;
+      x_(k) = last_torque_nm_ ? (*last_torque_nm_)[i] / scale : 0.0;
+      variance(k) = last_torque_nm_ ? sigma * sigma : 0.25;  // without torques yet: |mu| ~ 0.5
+    }
+  }
   p_.diagonal() = variance;
   if (layout_.slip_aware()) {  // correlated kappas (one terrain)
     const double covariance = slip.slip_compliance_wheel_correlation * slip.slip_compliance_sigma * slip.slip_compliance_sigma;

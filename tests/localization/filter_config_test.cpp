@@ -49,6 +49,8 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_wheel_correlation, sb.slip_compliance_wheel_correlation);
+  EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
+  EXPECT_EQ(sa.traction_noise_per_sqrt_s, sb.traction_noise_per_sqrt_s);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
   const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
   EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
@@ -156,13 +158,14 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
   EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
 }
 
-TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchAndTheKappaWalk) {
+TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheKappaWalkAndTheTorqueNoise) {
   // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4).
   FilterConfig expected;
   expected.name = "wheel-angles";
   expected.wheels.angle_measurement = true;
   expected.slip_aware_odometry.slip_compliance_noise_per_sqrt_m = 0.0;
   expected.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9999;
+  expected.slip_aware_odometry.torque_sigma_nm = 0.05;  // the simulated torque sensor's noise
   ExpectEqualConfigs(LoadFilterConfig(FilterFile("wheel-angles")), expected);
   EXPECT_FALSE(FilterConfig{}.wheels.angle_measurement);  // the default uses the speeds
 }
@@ -186,7 +189,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 57u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 59u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -280,7 +283,8 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
 const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
                                           "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
-                                          "slip_aware_odometry.slip_compliance_wheel_correlation"};
+                                          "slip_aware_odometry.slip_compliance_wheel_correlation",
+                                          "slip_aware_odometry.torque_sigma_nm"};
 
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();

@@ -124,6 +124,41 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
   }
 }
 
+// With traction states (torque noise: the torques measure mu), the wheel model takes mu from the
+// state when a message has torques: its column is d h / d mu = v kappa / (R (1 - kappa mu)^2);
+// without torques the acceleration's mu, as before.
+TEST(MeasurementModels, WheelJacobianWithTractionStatesMatchesCentralDifferences) {
+  std::mt19937 rng(52);
+  std::uniform_real_distribution<double> mu(-0.3, 0.3);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    SCOPED_TRACE(vehicle.name);
+    const StateLayout layout = StateLayout::For(vehicle, true, true, false, true);
+    ASSERT_TRUE(layout.has_traction());
+    for (int trial = 0; trial < 20; ++trial) {
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+      x.head(StateLayout::For(vehicle, true).size) = RandomState(StateLayout::For(vehicle, true), rng);
+      for (const int k : layout.traction) x(k) = mu(rng);
+      std::vector<double> torques(vehicle.wheels.size(), 1e6);  // ignored for mu: the states are used
+      ExpectJacobianMatchesNumeric(
+          [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, torques); }, x,
+          "wheels with traction states");
+      ExpectJacobianMatchesNumeric(
+          [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt, 0.0, true); }, x,
+          "no torques: the acceleration's mu");
+      const LinearizedMeasurement m = WheelSpeedModel(x, vehicle, layout, torques);
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        EXPECT_NE(m.jacobian(static_cast<Eigen::Index>(i), layout.traction[i]), 0.0);
+        EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, torques, false), x(layout.traction[i]));
+        EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, std::nullopt, false), 0.0);
+      }
+      const LinearizedMeasurement without = WheelSpeedModel(x, vehicle, layout, std::nullopt, 0.0, false);
+      for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
+        EXPECT_EQ(without.jacobian(static_cast<Eigen::Index>(i), layout.traction[i]), 0.0);
+      }
+    }
+  }
+}
+
 TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
   // The wheel model of the swerve robot: wheel i depends on its own delta, R and k only.
   const mapio::VehicleConfig vehicle = mapio::AgrimaroSwerveConfig();

@@ -98,7 +98,7 @@ struct Drive {
   std::vector<Sample> truth;
 };
 
-Drive MakeDrive(const VehicleConfig& v, Pose pose, const std::vector<Segment>& segments, double t0 = 0.0,
+[[maybe_unused]] Drive MakeDrive(const VehicleConfig& v, Pose pose, const std::vector<Segment>& segments, double t0 = 0.0,
                 unsigned seed = 1, bool torque = false) {
   const mapio::LocalFrame frame(kOrigin);
   std::mt19937_64 rng(seed);
@@ -129,7 +129,7 @@ Drive MakeDrive(const VehicleConfig& v, Pose pose, const std::vector<Segment>& s
   return d;
 }
 
-std::vector<Segment> StraightThenCircle() { return {{10.0, 1.0, 0.0, 0.0}, {30.0, 1.0, 0.0, 0.2}}; }
+[[maybe_unused]] std::vector<Segment> StraightThenCircle() { return {{10.0, 1.0, 0.0, 0.0}, {30.0, 1.0, 0.0, 0.2}}; }
 
 struct Snapshot {
   Eigen::VectorXd x;
@@ -160,7 +160,7 @@ bool BitIdentical(const Snapshot& a, const Snapshot& b) {
   EXPECT_TRUE(BitIdentical(before, Snap(ekf)));
 }
 
-double HeadingError(double a, double b) { return std::abs(WrapAngle(a - b)); }
+[[maybe_unused]] double HeadingError(double a, double b) { return std::abs(WrapAngle(a - b)); }
 
 // ---------------------------------------------------------------------------------------------
 

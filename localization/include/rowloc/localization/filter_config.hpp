@@ -61,6 +61,12 @@ struct SlipAwareOdometryConfig {
   /// Wheels messages without torques: the traction coefficient from the acceleration state
   /// (measurement_models.hpp) instead of 0.
   bool traction_from_acceleration = true;
+  /// The torque sensor's noise, N m (>= 0). 0: the measured torques are taken as exact. > 0: one
+  /// traction-coefficient state mu per wheel, which the torques measure (sigma T / (N r)); a torque
+  /// step beyond the gate re-anchors it (docs/localization-filter.md §5.5).
+  double torque_sigma_nm = 0.0;
+  /// Random walk of the traction states between torque steps, 1/sqrt(s).
+  double traction_noise_per_sqrt_s = 1e-4;
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

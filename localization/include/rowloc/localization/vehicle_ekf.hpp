@@ -138,6 +138,9 @@ class VehicleEkf {
   /// Returns false, and does nothing, when no wheel ticked since the last message (the vehicle is
   /// at rest: the caller uses the speeds).
   bool ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result);
+  /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
+  /// beyond the gate re-anchors them to the torques instead.
+  void ApplyTorques(double time_s, ProcessResult& result);
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
@@ -183,7 +186,7 @@ class VehicleEkf {
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
-    LinearizedMeasurement gnss, imu, wheels, steering, vio;
+    LinearizedMeasurement gnss, imu, wheels, steering, vio, torque;
     WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
     Eigen::VectorXd wheel_angles;       ///< measured angles, vehicle order
     Eigen::VectorXd innovation;
