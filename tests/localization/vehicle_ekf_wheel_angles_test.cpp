@@ -174,10 +174,13 @@ TEST(VehicleEkfWheelAngles, LayoutNamesTheAngleStatesLast) {
 }
 
 // P stays symmetric positive definite with angle updates, valid and hostile (counter jumps), torques
-// and accelerations, over randomized time steps.
+// (measuring the traction states, with steps) and accelerations, over randomized time steps.
 TEST(VehicleEkfWheelAngles, CovarianceStaysSymmetricPositiveDefinite) {
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
-  VehicleEkf ekf(v, AngleConfig(true), kOrigin, WheelNames(v));
+  FilterConfig config = AngleConfig(true);
+  config.slip_aware_odometry.torque_sigma_nm = 0.05;  // and the traction states (wheel-angles.json)
+  VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
+  ASSERT_TRUE(ekf.layout().has_traction());
   const Segment drive{0.0, 1.0, 0.2, 0.1};
   ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Vector3d(0.01, 0.01, 0.01).asDiagonal());
   std::mt19937_64 rng(20261202);
