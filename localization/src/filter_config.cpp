@@ -18,8 +18,8 @@ using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
 bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
 bool IsProbability(double value) { return std::isfinite(value) && value > 0.0 && value < 1.0; }
 
-/// What a value must be: finite and > 0 (the default), in (0, 1), or finite and >= 0.
-enum class Domain { kPositive, kProbability, kNonNegative };
+/// What a value must be: finite and > 0 (the default), in (0, 1), finite and >= 0, or in [0, 1).
+enum class Domain { kPositive, kProbability, kNonNegative, kFraction };
 
 struct Rule {
   const char* key;
@@ -44,6 +44,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.max_model_slip", s.max_model_slip, Domain::kProbability},
       {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, Domain::kNonNegative},
       {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, Domain::kNonNegative},
+      {"slip_aware_odometry.slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation, Domain::kFraction},
       {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
       {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
@@ -184,11 +185,12 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
       case Domain::kNonNegative:
         if (!(std::isfinite(rule.value) && rule.value >= 0.0)) return std::string(rule.key) + " must be finite and >= 0";
         break;
+      case Domain::kFraction:
+        if (!(std::isfinite(rule.value) && rule.value >= 0.0 && rule.value < 1.0)) {
+          return std::string(rule.key) + " must be in [0, 1)";
+        }
+        break;
     }
-  }
-  const double rho = config.slip_aware_odometry.slip_compliance_wheel_correlation;
-  if (!(std::isfinite(rho) && rho >= 0.0 && rho < 1.0)) {
-    return std::string("slip_aware_odometry.slip_compliance_wheel_correlation must be in [0, 1)");
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {

@@ -170,15 +170,33 @@ void WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleCon
   }
 }
 
-void SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout, const std::vector<std::size_t>& wheels,
-                   LinearizedMeasurement& m) {
-  SetZero(m, static_cast<Eigen::Index>(wheels.size()), x.size());
-  for (std::size_t j = 0; j < wheels.size(); ++j) {
-    const int index = layout.steering.at(wheels[j]);
-    if (index < 0) throw std::invalid_argument("steering model: wheel is not steerable");
+namespace {
+/// h_j = x(index_of(j)), j < count, with unit rows in H.
+template <typename IndexOf>
+void UnitRows(const Eigen::VectorXd& x, std::size_t count, IndexOf&& index_of, LinearizedMeasurement& m) {
+  SetZero(m, static_cast<Eigen::Index>(count), x.size());
+  for (std::size_t j = 0; j < count; ++j) {
+    const int index = index_of(j);
     m.predicted(static_cast<Eigen::Index>(j)) = x(index);
     m.jacobian(static_cast<Eigen::Index>(j), index) = 1.0;
   }
+}
+}  // namespace
+
+void SelectedStatesModel(const Eigen::VectorXd& x, const std::vector<int>& indices, LinearizedMeasurement& m) {
+  UnitRows(x, indices.size(), [&](std::size_t j) {
+    if (indices[j] < 0 || indices[j] >= x.size()) throw std::invalid_argument("selected states: no such state");
+    return indices[j];
+  }, m);
+}
+
+void SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout, const std::vector<std::size_t>& wheels,
+                   LinearizedMeasurement& m) {
+  UnitRows(x, wheels.size(), [&](std::size_t j) {
+    const int index = layout.steering.at(wheels[j]);
+    if (index < 0) throw std::invalid_argument("steering model: wheel is not steerable");
+    return index;
+  }, m);
 }
 
 void VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, LinearizedMeasurement& m) {

@@ -216,38 +216,39 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
 void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {
   const std::size_t n = vehicle_.wheels.size();
   UpdateBuffers& b = update_buffers_;
-  const auto m = static_cast<Eigen::Index>(n);
-  b.torque.predicted.resize(m);
-  b.torque.jacobian.setZero(m, layout_.size);
-  b.innovation.resize(m);
-  b.noise.setZero(m, m);
-  const double sigma_nm = config_.slip_aware_odometry.torque_sigma_nm;
+  Eigen::VectorXd& z = b.measured;  // mu = T / (N r) per wheel
+  z.resize(static_cast<Eigen::Index>(n));
+  b.noise.setZero(z.size(), z.size());
   for (std::size_t i = 0; i < n; ++i) {
     const auto row = static_cast<Eigen::Index>(i);
     const double scale = WheelTractionScaleNm(vehicle_, i);
-    b.torque.predicted(row) = x_(layout_.traction[i]);
-    b.torque.jacobian(row, layout_.traction[i]) = 1.0;
-    b.innovation(row) = (*last_torque_nm_)[i] / scale - b.torque.predicted(row);
-    b.noise(row, row) = (sigma_nm / scale) * (sigma_nm / scale);
+    const double sigma = config_.slip_aware_odometry.torque_sigma_nm / scale;
+    z(row) = (*last_torque_nm_)[i] / scale;
+    b.noise(row, row) = sigma * sigma;
   }
+  SelectedStatesModel(x_, layout_.traction, b.torque);
+  b.innovation = z - b.torque.predicted;
   result.updates.push_back(Update(time_s, "torque", b.innovation, b.torque.jacobian, b.noise, wheel_gates_[n - 1]));
   if (result.updates.back().outcome.accepted) return;
   // A torque step (the drive changed its command): the traction states jump to the measurement,
   // uncorrelated with the rest; the smoothing starts again from there.
   for (std::size_t i = 0; i < n; ++i) {
-    const int k = layout_.traction[i];
-    const double variance = b.noise(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i));
-    p_.row(k).setZero();
-    p_.col(k).setZero();
-    p_(k, k) = variance;
-    x_(k) = (*last_torque_nm_)[i] / WheelTractionScaleNm(vehicle_, i);
+    const auto row = static_cast<Eigen::Index>(i);
+    Reanchor(layout_.traction[i], z(row), b.noise(row, row));
   }
+}
+
+void VehicleEkf::Reanchor(int index, double value, double variance) {
+  p_.row(index).setZero();
+  p_.col(index).setZero();
+  p_(index, index) = variance;
+  x_(index) = value;
 }
 
 bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result) {
   const std::size_t n = vehicle_.wheels.size();
   UpdateBuffers& b = update_buffers_;
-  Eigen::VectorXd& z = b.wheel_angles;
+  Eigen::VectorXd& z = b.measured;
   z.resize(static_cast<Eigen::Index>(n));
   for (std::size_t j = 0; j < n; ++j) z(static_cast<Eigen::Index>(wheel_index_[j])) = (*wheels.angle_rad)[j];
   // No wheel ticked since the last message: at rest the quantization error is frozen, a bias the
@@ -268,13 +269,8 @@ bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& re
   }
   // Anchor (first angles since initialisation, or after a gated-out update): theta = z with the
   // quantization variance, uncorrelated with the other states. Only the angle's offset is lost.
-  for (std::size_t i = 0; i < n; ++i) {
-    const int k = layout_.wheel_angle[i];
-    p_.row(k).setZero();
-    p_.col(k).setZero();
-    p_(k, k) = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
-    x_(k) = z(static_cast<Eigen::Index>(i));
-  }
+  const double variance = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
+  for (std::size_t i = 0; i < n; ++i) Reanchor(layout_.wheel_angle[i], z(static_cast<Eigen::Index>(i)), variance);
   wheel_angles_anchored_ = true;
   return true;
 }

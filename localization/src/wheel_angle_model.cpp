@@ -47,15 +47,7 @@ void PropagateWheelAngles(const mapio::VehicleConfig& vehicle, const StateLayout
 
 void WheelAngleModel(const Eigen::VectorXd& x, const StateLayout& layout, LinearizedMeasurement& out) {
   if (!layout.has_wheel_angles()) throw std::invalid_argument("wheel angle model: the layout has no wheel-angle states");
-  const auto n = static_cast<Eigen::Index>(layout.wheel_count());
-  if (out.predicted.size() != n) out.predicted.resize(n);
-  if (out.jacobian.rows() != n || out.jacobian.cols() != x.size()) out.jacobian.resize(n, x.size());
-  out.jacobian.setZero();
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const int index = layout.wheel_angle[static_cast<std::size_t>(i)];
-    out.predicted(i) = x(index);
-    out.jacobian(i, index) = 1.0;
-  }
+  SelectedStatesModel(x, layout.wheel_angle, out);
 }
 
 }  // namespace rowloc::localization

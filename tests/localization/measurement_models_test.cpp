@@ -159,6 +159,19 @@ TEST(MeasurementModels, WheelJacobianWithTractionStatesMatchesCentralDifferences
   }
 }
 
+TEST(MeasurementModels, SelectedStatesAreMeasuredDirectly) {
+  Eigen::VectorXd x(6);
+  x << 0.5, -1.0, 2.0, 3.5, -4.0, 7.0;
+  LinearizedMeasurement m;
+  SelectedStatesModel(x, {4, 1, 5}, m);
+  EXPECT_EQ(m.predicted, Eigen::Vector3d(-4.0, -1.0, 7.0));
+  Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(3, 6);
+  expected(0, 4) = expected(1, 1) = expected(2, 5) = 1.0;
+  EXPECT_EQ(m.jacobian, expected);
+  EXPECT_THROW(SelectedStatesModel(x, {1, 6}, m), std::invalid_argument);
+  EXPECT_THROW(SelectedStatesModel(x, {-1}, m), std::invalid_argument);
+}
+
 TEST(MeasurementModels, JacobianColumnsOfUnrelatedStatesAreZero) {
   // The wheel model of the swerve robot: wheel i depends on its own delta, R and k only.
   const mapio::VehicleConfig vehicle = mapio::AgrimaroSwerveConfig();

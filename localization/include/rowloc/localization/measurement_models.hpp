@@ -109,6 +109,11 @@ LinearizedMeasurement WheelLateralVelocityModel(const Eigen::VectorXd& x, const 
 void WheelLateralVelocityModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
                                const StateLayout& layout, LinearizedMeasurement& out);
 
+/// States measured directly: h = (x(indices[0]), x(indices[1]), ...), H the matching unit rows
+/// (the steering angles, the wheel angles, the traction states). Each index must be a state of x,
+/// else std::invalid_argument.
+void SelectedStatesModel(const Eigen::VectorXd& x, const std::vector<int>& indices, LinearizedMeasurement& out);
+
 /// Steering angles of the given wheels (indices into the vehicle's wheels; each must be steerable,
 /// else std::invalid_argument).
 LinearizedMeasurement SteeringModel(const Eigen::VectorXd& x, const StateLayout& layout,

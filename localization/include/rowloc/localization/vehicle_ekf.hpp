@@ -141,6 +141,9 @@ class VehicleEkf {
   /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
   /// beyond the gate re-anchors them to the torques instead.
   void ApplyTorques(double time_s, ProcessResult& result);
+  /// State `index` set to `value` with `variance`, uncorrelated with the others (wheel angles and
+  /// traction states anchored to their measurement).
+  void Reanchor(int index, double value, double variance);
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
@@ -188,7 +191,7 @@ class VehicleEkf {
   struct UpdateBuffers {
     LinearizedMeasurement gnss, imu, wheels, steering, vio, torque;
     WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
-    Eigen::VectorXd wheel_angles;       ///< measured angles, vehicle order
+    Eigen::VectorXd measured;           ///< wheel angles or traction coefficients, vehicle order
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
