@@ -11,18 +11,9 @@ void ExpectConverged(const VehicleConfig& v, bool slip_aware) {
   SCOPED_TRACE(v.name + (slip_aware ? " slip-aware" : ""));
   const Drive d = MakeDrive(v, {{-5.0, 2.0}, 0.4}, StraightThenCircle(), 0.0, 3, slip_aware);
   VehicleEkf ekf = MakeEkf(v, slip_aware);
-  std::size_t fix = 0;
-  double worst_position = 0.0, worst_heading = 0.0;
-  for (const SensorMessage& m : d.messages) {
-    ekf.Process(m);
-    if (!std::holds_alternative<GpsMessage>(m)) continue;
-    const Sample& truth = d.truth[fix++];
-    if (truth.t < 8.0) continue;
-    worst_position = std::max(worst_position, (ekf.state().head<2>() - truth.pose.p).norm());
-    worst_heading = std::max(worst_heading, HeadingError(ekf.state()(StateLayout::kPhi), truth.pose.phi));
-  }
-  EXPECT_LT(worst_position, 0.05);
-  EXPECT_LT(worst_heading, kPi / 180);
+  const WorstErrors worst = ReplayDrive(ekf, d, 8.0);
+  EXPECT_LT(worst.position_m, 0.05);
+  EXPECT_LT(worst.heading_rad, kPi / 180);
 }
 
 TEST(VehicleEkfAccuracy, SyntheticStraightAndCircleEveryVehicle) {

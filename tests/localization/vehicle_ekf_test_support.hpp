@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -161,6 +162,28 @@ bool BitIdentical(const Snapshot& a, const Snapshot& b) {
 }
 
 [[maybe_unused]] double HeadingError(double a, double b) { return std::abs(WrapAngle(a - b)); }
+
+/// The largest position (m) and heading (rad) errors at a drive's fixes from settle_s on.
+struct WorstErrors {
+  double position_m = 0.0;
+  double heading_rad = 0.0;
+};
+/// Processes every message of `d`; `on_result`, if given, sees each message's result.
+[[maybe_unused]] WorstErrors ReplayDrive(VehicleEkf& ekf, const Drive& d, double settle_s,
+                                         const std::function<void(const ProcessResult&)>& on_result = {}) {
+  WorstErrors worst;
+  std::size_t fix = 0;
+  for (const SensorMessage& m : d.messages) {
+    const ProcessResult r = ekf.Process(m);
+    if (on_result) on_result(r);
+    if (!std::holds_alternative<GpsMessage>(m)) continue;
+    const Sample& truth = d.truth[fix++];
+    if (truth.t < settle_s) continue;
+    worst.position_m = std::max(worst.position_m, (ekf.state().head<2>() - truth.pose.p).norm());
+    worst.heading_rad = std::max(worst.heading_rad, HeadingError(ekf.state()(StateLayout::kPhi), truth.pose.phi));
+  }
+  return worst;
+}
 
 // ---------------------------------------------------------------------------------------------
 

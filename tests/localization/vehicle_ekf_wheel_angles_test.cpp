@@ -43,24 +43,17 @@ void ExpectConvergedWithAngles(const VehicleConfig& v, bool slip_aware) {
   AddWheelAngles(d);
   VehicleEkf ekf(v, AngleConfig(slip_aware), kOrigin, WheelNames(v));
   ASSERT_TRUE(ekf.layout().has_wheel_angles());
-  std::size_t fix = 0, angle_updates = 0, speed_updates = 0;
-  double worst_position = 0.0, worst_heading = 0.0;
-  for (const SensorMessage& m : d.messages) {
-    const ProcessResult r = ekf.Process(m);
+  std::size_t angle_updates = 0, speed_updates = 0;
+  const WorstErrors worst = ReplayDrive(ekf, d, 8.0, [&](const ProcessResult& r) {
     for (const UpdateRecord& u : r.updates) {
       angle_updates += u.sensor == "wheel_angles";
       speed_updates += u.sensor == "wheels";
     }
-    if (!std::holds_alternative<GpsMessage>(m)) continue;
-    const Sample& truth = d.truth[fix++];
-    if (truth.t < 8.0) continue;
-    worst_position = std::max(worst_position, (ekf.state().head<2>() - truth.pose.p).norm());
-    worst_heading = std::max(worst_heading, HeadingError(ekf.state()(StateLayout::kPhi), truth.pose.phi));
-  }
+  });
   EXPECT_GT(angle_updates, 3500u);
   EXPECT_EQ(speed_updates, 0u);  // every message carries angles: no speed update
-  EXPECT_LT(worst_position, 0.05);
-  EXPECT_LT(worst_heading, kPi / 180);
+  EXPECT_LT(worst.position_m, 0.05);
+  EXPECT_LT(worst.heading_rad, kPi / 180);
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance()).info(), Eigen::Success);
 }
 

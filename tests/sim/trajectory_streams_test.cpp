@@ -159,6 +159,11 @@ TEST_P(RejectsBadInput, WithMessageNamingFileLineAndKey) {
 
 const std::string kTruthLine = R"("type":"truth","t":1,"x_m":0,"y_m":0,"phi_rad":0,"gnss_available":true)";
 
+/// An estimate line whose wheel_calibration holds wheel "l" with these fields.
+std::string Calibration(const std::string& fields) {
+  return R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{)" + fields + "}}}\n";
+}
+
 INSTANTIATE_TEST_SUITE_P(
     TrajectoryStreams, RejectsBadInput,
     ::testing::Values(
@@ -217,24 +222,19 @@ INSTANTIATE_TEST_SUITE_P(
                  R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":0.16}})" "\n",
                  "key 'wheel_calibration.l': expected an object, got number"},
         BadInput{"CalibrationMissingSigma", false,
-                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
-                 R"("slip_compliance":0.7,"slip_compliance_sigma":0.2}}})" "\n",
+                 Calibration(R"("rolling_radius_m":0.16,"slip_compliance":0.7,"slip_compliance_sigma":0.2)"),
                  "key 'wheel_calibration.l.rolling_radius_sigma_m': missing required key"},
         BadInput{"CalibrationRadiusNotPositive", false,
-                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":-0.16,)"
-                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.7,"slip_compliance_sigma":0.2}}})" "\n",
+                 Calibration(R"("rolling_radius_m":-0.16,"rolling_radius_sigma_m":0.002,"slip_compliance":0.7,"slip_compliance_sigma":0.2)"),
                  "key 'wheel_calibration.l.rolling_radius_m': must be > 0"},
         BadInput{"CalibrationNegativeCompliance", false,
-                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
-                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":-0.1,"slip_compliance_sigma":0.2}}})" "\n",
+                 Calibration(R"("rolling_radius_m":0.16,"rolling_radius_sigma_m":0.002,"slip_compliance":-0.1,"slip_compliance_sigma":0.2)"),
                  "key 'wheel_calibration.l.slip_compliance': must be >= 0"},
         BadInput{"CalibrationNegativeSigma", false,
-                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":0.16,)"
-                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":-0.2}}})" "\n",
+                 Calibration(R"("rolling_radius_m":0.16,"rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":-0.2)"),
                  "key 'wheel_calibration.l.slip_compliance_sigma': must be >= 0"},
         BadInput{"CalibrationWrongType", false,
-                 R"({"type":"estimate","t":0,"x_m":1,"y_m":1,"wheel_calibration":{"l":{"rolling_radius_m":"0.16",)"
-                 R"("rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":0.2}}})" "\n",
+                 Calibration(R"("rolling_radius_m":"0.16","rolling_radius_sigma_m":0.002,"slip_compliance":0.1,"slip_compliance_sigma":0.2)"),
                  "key 'wheel_calibration.l.rolling_radius_m': expected a number, got string"},
         BadInput{"UpdateSizeMismatch", false,
                  R"({"type":"update","t":0,"sensor":"g","innovation":[1,2],"innovation_covariance":[1],"nis":1,"accepted":true})" "\n",
