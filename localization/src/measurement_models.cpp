@@ -85,6 +85,20 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
   return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
 }
 
+namespace {
+/// The traction coefficient of wheel i (WheelTractionCoefficient's rule): the traction state when
+/// the torques measure one, else the torque over N r, else the acceleration's (centre() gives the
+/// wheel's direction: called only then), else 0.
+template <typename Centre>
+double Traction(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout, std::size_t i,
+                const std::optional<std::vector<double>>& torque_nm, bool from_acceleration, Centre&& centre) {
+  if (torque_nm && layout.traction[i] >= 0) return x(layout.traction[i]);
+  if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
+  if (!from_acceleration) return 0.0;
+  return TractionFromAcceleration(x, centre());
+}
+}  // namespace
+
 double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                                 std::size_t i, const std::optional<std::vector<double>>& torque_nm,
                                 bool from_acceleration) {
@@ -92,11 +106,7 @@ double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleCo
   if (torque_nm && torque_nm->size() != vehicle.wheels.size()) {
     throw std::invalid_argument("traction coefficient: one torque per wheel");
   }
-  if (torque_nm && layout.traction[i] >= 0) return x(layout.traction[i]);
-  if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
-  if (!from_acceleration) return 0.0;
-  const WheelCentre w = CentreOf(x, vehicle, layout, i);
-  return TractionFromAcceleration(x, w);
+  return Traction(x, vehicle, layout, i, torque_nm, from_acceleration, [&] { return CentreOf(x, vehicle, layout, i); });
 }
 
 void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
@@ -122,10 +132,7 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     if (layout.slip_aware()) {
       const double kappa = x(layout.slip_compliance[i]);
       const bool mu_state = torque_nm && layout.traction[i] >= 0;  // the torques measure the state mu
-      const double mu = mu_state                     ? x(layout.traction[i])
-                        : torque_nm                  ? (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i)
-                        : traction_from_acceleration ? TractionFromAcceleration(x, w)
-                                                     : 0.0;
+      const double mu = Traction(x, vehicle, layout, i, torque_nm, traction_from_acceleration, [&] { return w; });
       gain = 1.0 / (1.0 - kappa * mu);
       m.jacobian(row, layout.slip_compliance[i]) = v / radius * mu * gain * gain;
       m.jacobian(row, layout.rolling_radius[i]) = -v * gain / (radius * radius);
