@@ -176,6 +176,28 @@ void BM_CycleSwerveWithoutSteeringMessage(benchmark::State& state) {
   RunCycles(state, rowloc::mapio::AgrimaroSwerveConfig(), false, false);
 }
 
+/// The swerve slip-aware cycle while the filter records its pass for the fixed-interval smoother
+/// (VehicleEkf::EnableSmoothing; rowloc replay --smoothed), one mark every 10 cycles (the replay's
+/// 0.1 s estimate period). The backward pass after the run is not timed (one pass per mark, far
+/// fewer than the nodes).
+void BM_CycleSwerveSlipAwareSmoothing(benchmark::State& state) {
+  Converged c(rowloc::mapio::AgrimaroSwerveConfig(), true);
+  c.ekf.EnableSmoothing();
+  for (auto _ : state) {
+    const double t = 0.01 * static_cast<double>(c.cycle);
+    for (loc::SensorMessage& m : c.lap[static_cast<std::size_t>(c.cycle % kCyclesPerLap)]) {
+      c.SetTime(m, t);
+      auto result = c.ekf.Process(m);
+      benchmark::DoNotOptimize(result);
+    }
+    if (c.cycle % 10 == 0) c.ekf.MarkForSmoothing();
+    ++c.cycle;
+  }
+  state.counters["states"] = c.ekf.layout().size;
+  state.counters["nodes_per_cycle"] =
+      static_cast<double>(c.ekf.smoother()->nodes()) / static_cast<double>(state.iterations());
+}
+
 /// x and P of the converged 18-state swerve filter.
 struct Snapshot {
   VehicleConfig vehicle = rowloc::mapio::AgrimaroSwerveConfig();
@@ -246,6 +268,7 @@ BENCHMARK(BM_CycleDifferentialSlipAware);
 BENCHMARK(BM_CycleDifferentialWheelAngles);
 BENCHMARK(BM_CycleTracked);
 BENCHMARK(BM_CycleSwerveWithoutSteeringMessage);
+BENCHMARK(BM_CycleSwerveSlipAwareSmoothing);
 BENCHMARK(BM_RestoreStateAndCovariance);
 BENCHMARK(BM_PredictStep);
 BENCHMARK(BM_KalmanUpdate2d);

@@ -8,6 +8,10 @@
 // ultrasonic echoes update the filter against the rows (map-aided update, issue 5; the method is the
 // filter file's map_aided.method) and the summary counts what happened to every echo; --echo-log
 // FILE writes one line per echo with the position ellipse before and after it (scripts/plot-echoes). --skip withholds a message type (counted; ablation runs).
+// --smoothed FILE also writes the fixed-interval (RTS) smoothed estimates at the same times
+// (fixed_interval_smoother.hpp; docs/localization-filter.md §6): every line then uses every
+// measurement of the log, before and after it. Their slip is the same estimator on the smoothed
+// state and the raw encoder speeds of that time; skid-steer track slip is the observer's, unsmoothed.
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -17,6 +21,7 @@
 #include "rowloc/localization/sensor_log_reader.hpp"
 #include "rowloc/localization/track_slip_observer.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
+#include "rowloc/localization/wheel_slip_estimate.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
@@ -46,6 +51,7 @@ struct ReplayOptions {
   std::string filter_path;
   std::string map_path;
   std::string echo_log_path;  ///< --echo-log: one NDJSON line per echo (EchoTrace)
+  std::string smoothed_path;  ///< --smoothed: the fixed-interval smoothed estimate stream
   std::string output_path;
   double period_s = 0.1;
   bool no_updates = false;
@@ -100,11 +106,10 @@ class TrackSlipTap {
 };
 
 /// R_w and kappa of every wheel with their standard deviations (empty without slip-aware odometry).
-std::vector<sim::WheelCalibrationRecord> CalibrationOf(const localization::VehicleEkf& ekf) {
+std::vector<sim::WheelCalibrationRecord> CalibrationOf(const localization::VehicleEkf& ekf, const Eigen::VectorXd& x,
+                                                        const Eigen::MatrixXd& p) {
   const localization::StateLayout& layout = ekf.layout();
   if (!layout.slip_aware()) return {};
-  const Eigen::VectorXd& x = ekf.state();
-  const Eigen::MatrixXd& p = ekf.covariance();
   std::vector<sim::WheelCalibrationRecord> wheels;
   for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
     const int r = layout.rolling_radius[i], k = layout.slip_compliance[i];
@@ -114,21 +119,55 @@ std::vector<sim::WheelCalibrationRecord> CalibrationOf(const localization::Vehic
   return wheels;
 }
 
-sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf, const TrackSlipTap& tracks) {
+/// The estimate line of state x with covariance p at time_s: pose, calibration, and slip (the track
+/// observer's for skid-steer vehicles, else SAE slip from x and the raw encoder speeds, if any).
+sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf, double time_s, const Eigen::VectorXd& x,
+                               const Eigen::MatrixXd& p, const std::vector<double>& speeds_radps,
+                               const TrackSlipTap& tracks) {
   sim::EstimateRecord record;
-  record.time_s = ekf.time_s();
-  record.position_m = ekf.state().head<2>();
-  record.heading_rad = ekf.state()(localization::StateLayout::kPhi);
-  record.covariance = ekf.covariance().topLeftCorner<3, 3>();
-  record.wheel_calibration = CalibrationOf(ekf);
+  record.time_s = time_s;
+  record.position_m = x.head<2>();
+  record.heading_rad = x(localization::StateLayout::kPhi);
+  record.covariance = p.topLeftCorner<3, 3>();
+  record.wheel_calibration = CalibrationOf(ekf, x, p);
   if (tracks.active()) {
     record.slip = tracks.Slip(ekf.vehicle());
     return record;
   }
-  const std::vector<double> slip = ekf.WheelSlip();
+  if (speeds_radps.empty()) return record;
+  const std::vector<double> slip = localization::EstimateWheelSlip(
+      x, ekf.vehicle(), ekf.layout(), speeds_radps, ekf.config().slip_aware_odometry.slip_with_rolling_radius);
   for (std::size_t i = 0; i < slip.size(); ++i) record.slip.emplace_back(ekf.vehicle().wheels[i].name, slip[i]);
   return record;
 }
+
+/// --smoothed: what each estimate line needs besides the smoothed state (its time, the raw
+/// encoder speeds and the track slip of that moment), then the smoothed stream.
+class SmoothedStream {
+ public:
+  void Keep(const localization::VehicleEkf& ekf, const sim::EstimateRecord& filtered) {
+    kept_.push_back({filtered, ekf.last_wheel_speeds_radps()});
+  }
+  /// Writes one smoothed line per kept one; returns the number written.
+  std::size_t Write(localization::VehicleEkf& ekf, const TrackSlipTap& tracks, sim::EstimateLogWriter& writer) {
+    const std::vector<localization::SmoothedState> smoothed = ekf.FinishSmoothing();
+    if (smoothed.size() != kept_.size()) throw std::logic_error("smoothed estimates do not match the marks");
+    for (std::size_t i = 0; i < kept_.size(); ++i) {
+      sim::EstimateRecord record =
+          EstimateOf(ekf, smoothed[i].time_s, smoothed[i].state, smoothed[i].covariance, kept_[i].speeds_radps, tracks);
+      if (tracks.active()) record.slip = kept_[i].filtered.slip;  // the observer's at that time
+      writer.Write(record);
+    }
+    return kept_.size();
+  }
+
+ private:
+  struct Kept {
+    sim::EstimateRecord filtered;
+    std::vector<double> speeds_radps;
+  };
+  std::vector<Kept> kept_;
+};
 
 void WriteUpdates(const localization::ProcessResult& result, sim::EstimateLogWriter& writer, bool write,
                   std::map<std::string, UpdateCounts>& counts) {
@@ -188,6 +227,15 @@ void RunReplay(const ReplayOptions& o) {
              << '\n';
   }
   sim::EstimateLogWriter writer(out, "rowloc replay", vehicle.name, reader.header().origin);
+  std::ofstream smoothed_out;
+  std::optional<SmoothedStream> smoothed;
+  if (!o.smoothed_path.empty()) {
+    if (o.smoothed_path == o.output_path) throw std::runtime_error("--smoothed: the same file as --output");
+    smoothed_out.open(o.smoothed_path, std::ios::binary | std::ios::trunc);
+    if (!smoothed_out) throw std::runtime_error(o.smoothed_path + ": cannot open for writing");
+    ekf.EnableSmoothing();
+    smoothed.emplace();
+  }
   spdlog::info("replay {} with vehicle {} and filter {}", o.log_path, vehicle.name, config.name);
 
   TrackSlipTap tracks(vehicle);
@@ -219,7 +267,13 @@ void RunReplay(const ReplayOptions& o) {
       ++echo_lines;
     }
     if (ekf.initialised() && ekf.time_s() >= next_output_s) {
-      writer.Write(EstimateOf(ekf, tracks));
+      const sim::EstimateRecord record =
+          EstimateOf(ekf, ekf.time_s(), ekf.state(), ekf.covariance(), ekf.last_wheel_speeds_radps(), tracks);
+      writer.Write(record);
+      if (smoothed) {
+        smoothed->Keep(ekf, record);
+        ekf.MarkForSmoothing();
+      }
       ++estimates;
       next_output_s = ekf.time_s() + o.period_s;
     }
@@ -250,6 +304,15 @@ void RunReplay(const ReplayOptions& o) {
     spdlog::info("wrote echo log {}: {} echoes", o.echo_log_path, echo_lines);
   }
   spdlog::info("wrote {}", o.output_path);
+  if (smoothed) {
+    const std::size_t nodes = ekf.smoother()->nodes();
+    sim::EstimateLogWriter smoothed_writer(smoothed_out, "rowloc replay --smoothed", vehicle.name,
+                                           reader.header().origin);
+    const std::size_t lines = smoothed->Write(ekf, tracks, smoothed_writer);
+    smoothed_out.flush();
+    if (!smoothed_out) throw std::runtime_error(o.smoothed_path + ": write failed");
+    spdlog::info("wrote {}: {} smoothed estimates over {} filter nodes", o.smoothed_path, lines, nodes);
+  }
 }
 
 }  // namespace
@@ -265,6 +328,8 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_option("--echo-log", o->echo_log_path,
                   "With --map: one NDJSON line per echo, the position ellipse before and after it");
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
+  cmd->add_option("--smoothed", o->smoothed_path,
+                  "Also write the fixed-interval (RTS) smoothed estimates, same times and format (post-run)");
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");
   cmd->add_option("--skip", o->skip_types, "Message types not given to the filter (e.g. imu: odometry-only runs)")

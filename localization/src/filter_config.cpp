@@ -112,7 +112,7 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
                              s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
                              s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
-                             s.Number("traction_noise_per_sqrt_s")};
+                             s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius")};
     s.RejectUnknownKeys();
   }
   {

@@ -192,9 +192,11 @@ void Congruence(const BaseJacobian& f, Eigen::MatrixXd& p) {
 }  // namespace
 
 void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
-                 Eigen::VectorXd& x, Eigen::MatrixXd& p, double dt) {
+                 Eigen::VectorXd& x, Eigen::MatrixXd& p, double dt, BaseJacobian* base_jacobian) {
   const Twist before{x(L::kVx), x(L::kVy), x(L::kYawRate)};
-  Congruence(PropagateState(x, dt), p);
+  const BaseJacobian f = PropagateState(x, dt);
+  Congruence(f, p);
+  if (base_jacobian != nullptr) *base_jacobian = f;
   AddProcessNoise(vehicle, layout, config, before, p, dt);
 }
 

@@ -81,6 +81,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
 }
 
 void VehicleEkf::Reset() {
+  if (smoother_ && initialised_) smoother_->End(x_, p_);
   initialised_ = false;
   anchor_enu_.reset();
   wheel_angles_anchored_ = false;
@@ -111,17 +112,26 @@ void VehicleEkf::PredictTo(double t) {
   double remaining = t - time_s_;
   while (remaining > 0.0) {
     const double dt = std::min(remaining, config_.max_prediction_step_s);
+    if (smoother_) BeginTransition();
     if (layout_.has_wheel_angles()) {  // before the base step: F = F_base (I + dt E J), wheel_angle_model.hpp
       ProjectStates(true);              // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
       PropagateWheelAngles(vehicle_, layout_, config_, last_torque_nm_, x_, p_, dt, update_buffers_.wheel_rates);
+      if (smoother_) smoother_->TransitionAddRows(layout_.wheel_angle, dt * update_buffers_.wheel_rates.rates.jacobian);
     }
-    PredictStep(vehicle_, layout_, config_, x_, p_, dt);
+    if (smoother_) {
+      BaseJacobian f;
+      PredictStep(vehicle_, layout_, config_, x_, p_, dt, &f);
+      smoother_->TransitionBlock(0, f);
+    } else {
+      PredictStep(vehicle_, layout_, config_, x_, p_, dt);
+    }
     remaining -= dt;
   }
 }
 
 UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const VectorRef& innovation,
                                 const MatrixRef& jacobian, const MatrixRef& noise, double gate) {
+  if (smoother_) smoother_->BeginUpdate(x_, p_);
   UpdateRecord record{t, sensor, KalmanUpdate(x_, p_, innovation, jacobian, noise, gate, L::kPhi)};
   return record;
 }
@@ -142,6 +152,7 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
   const Eigen::Vector2d innovation = antenna - h.predicted;
   double gate = gate_gps_;
   if (gps_gated_since_s_ && gps.time_s - *gps_gated_since_s_ > config_.gps.reacquire_after_s) {
+    if (smoother_) BeginTransition();  // added noise: no change of the transition
     p_.topLeftCorner<2, 2>() += innovation * innovation.transpose();
     gate = std::numeric_limits<double>::infinity();
     std::ostringstream notice;
@@ -239,6 +250,7 @@ void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {
 }
 
 void VehicleEkf::Reanchor(int index, double value, double variance) {
+  if (smoother_) BeginTransition({index});
   p_.row(index).setZero();
   p_.col(index).setZero();
   p_(index, index) = variance;
@@ -320,7 +332,7 @@ ProcessResult VehicleEkf::Apply(const VioMessage& vio) {
 
 std::vector<double> VehicleEkf::WheelSlip() const {
   if (!initialised_ || last_speed_radps_.empty()) return {};
-  return EstimateWheelSlip(x_, vehicle_, layout_, last_speed_radps_);
+  return EstimateWheelSlip(x_, vehicle_, layout_, last_speed_radps_, config_.slip_aware_odometry.slip_with_rolling_radius);
 }
 
 void VehicleEkf::ProjectStates(bool before_wheel_model) {
@@ -329,18 +341,26 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
     if (d >= 0) x_(d) = WrapAngle(x_(d));
   }
   if (!layout_.slip_aware()) return;
+  ClampCalibrationStates(x_);
   const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
   // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
   // model linearizes 1 / (1 - kappa mu): checked there, not after every message.
   const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
-    const double nominal = vehicle_.wheels[i].nominal_radius_m;
-    double& radius = x_(layout_.rolling_radius[i]);
-    radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
     const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
     double& kappa = x_(layout_.slip_compliance[i]);
-    kappa = std::max(kappa, 0.0);
     if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);
+  }
+}
+
+void VehicleEkf::ClampCalibrationStates(Eigen::VectorXd& x) const {
+  if (!layout_.slip_aware()) return;
+  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
+    const double nominal = vehicle_.wheels[i].nominal_radius_m;
+    double& radius = x(layout_.rolling_radius[i]);
+    radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
+    double& kappa = x(layout_.slip_compliance[i]);
+    kappa = std::max(kappa, 0.0);
   }
 }
 

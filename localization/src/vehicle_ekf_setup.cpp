@@ -7,6 +7,9 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
+#include <utility>
+#include <vector>
 
 namespace rowloc::localization {
 
@@ -188,6 +191,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   initialised_ = true;
   anchor_enu_.reset();
   wheel_angles_anchored_ = false;
+  if (smoother_) smoother_->Start(x_, p_);
 }
 
 void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance) {
@@ -201,11 +205,43 @@ void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Mat
   }
   PredictTo(t);
   time_s_ = t;
+  if (smoother_) BeginTransition({L::kX, L::kY, L::kPhi});  // the pose is set anew
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topRows<3>().setZero();
   p_.leftCols<3>().setZero();
   p_.topLeftCorner<3, 3>() = symmetric;
+}
+
+void VehicleEkf::EnableSmoothing(bool check_transitions) {
+  if (smoother_) throw std::logic_error("EnableSmoothing: smoothing is already enabled");
+  std::vector<int> angles{L::kPhi};  // wrapped angles; the wheel angles are cumulative, not wrapped
+  for (const int d : layout_.steering) {
+    if (d >= 0) angles.push_back(d);
+  }
+  smoother_.emplace(layout_.size, std::move(angles), check_transitions);
+  if (initialised_) smoother_->Start(x_, p_);
+}
+
+std::size_t VehicleEkf::MarkForSmoothing() {
+  if (!smoother_) throw std::logic_error("MarkForSmoothing: smoothing is not enabled (EnableSmoothing)");
+  if (!initialised_) throw std::logic_error("MarkForSmoothing: the filter is not initialised");
+  return smoother_->Mark(time_s_, x_, p_);
+}
+
+std::vector<SmoothedState> VehicleEkf::FinishSmoothing() {
+  if (!smoother_) throw std::logic_error("FinishSmoothing: smoothing is not enabled (EnableSmoothing)");
+  smoother_->End(x_, p_);
+  const FixedIntervalSmoother recorded = std::move(*smoother_);
+  smoother_.reset();
+  std::vector<SmoothedState> smoothed = recorded.Smooth();
+  for (SmoothedState& s : smoothed) ClampCalibrationStates(s.state);
+  return smoothed;
+}
+
+void VehicleEkf::BeginTransition(const std::vector<int>& rows_reset) {
+  smoother_->BeginTransition(x_, p_);
+  if (!rows_reset.empty()) smoother_->TransitionZeroRows(rows_reset);
 }
 
 }  // namespace rowloc::localization

@@ -22,14 +22,16 @@ double SaeSlip(double wheel_speed_radps, double rolling_radius_m, double longitu
 }
 
 std::vector<double> EstimateWheelSlip(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle,
-                                      const StateLayout& layout, const std::vector<double>& raw_speed_radps) {
+                                      const StateLayout& layout, const std::vector<double>& raw_speed_radps,
+                                      bool with_rolling_radius) {
   if (raw_speed_radps.size() != vehicle.wheels.size()) {
     throw std::invalid_argument("wheel slip: one encoder speed per wheel expected");
   }
   std::vector<double> slip(raw_speed_radps.size());
   for (std::size_t i = 0; i < slip.size(); ++i) {
-    slip[i] = SaeSlip(raw_speed_radps[i], vehicle.wheels[i].nominal_radius_m,
-                      WheelLongitudinalVelocity(x, vehicle, layout, i));
+    const bool state_radius = with_rolling_radius && layout.slip_aware();
+    const double radius = state_radius ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
+    slip[i] = SaeSlip(raw_speed_radps[i], radius, WheelLongitudinalVelocity(x, vehicle, layout, i));
   }
   return slip;
 }

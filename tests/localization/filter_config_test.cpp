@@ -52,6 +52,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
   EXPECT_EQ(sa.traction_noise_per_sqrt_s, sb.traction_noise_per_sqrt_s);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
+  EXPECT_EQ(sa.slip_with_rolling_radius, sb.slip_with_rolling_radius);
   const InitialisationConfig &ia = a.initialisation, &ib = b.initialisation;
   EXPECT_EQ(ia.heading_baseline_m, ib.heading_baseline_m);
   EXPECT_EQ(ia.heading_sigma_rad, ib.heading_sigma_rad);
@@ -158,15 +159,18 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
   EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
 }
 
-TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheKappaWalkAndTheTorqueNoise) {
-  // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4).
+TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheKappaWalkTheTorqueNoiseAndTheSlipRadius) {
+  // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4);
+  // R_w consistent there, so the slip uses it (§6).
   FilterConfig expected;
   expected.name = "wheel-angles";
   expected.wheels.angle_measurement = true;
   expected.slip_aware_odometry.slip_compliance_noise_per_sqrt_m = 0.0;
   expected.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9999;
   expected.slip_aware_odometry.torque_sigma_nm = 0.05;  // the simulated torque sensor's noise
+  expected.slip_aware_odometry.slip_with_rolling_radius = true;
   ExpectEqualConfigs(LoadFilterConfig(FilterFile("wheel-angles")), expected);
+  EXPECT_FALSE(FilterConfig{}.slip_aware_odometry.slip_with_rolling_radius);  // the default: nominal radius
   EXPECT_FALSE(FilterConfig{}.wheels.angle_measurement);  // the default uses the speeds
 }
 
@@ -189,7 +193,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 59u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 60u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());

@@ -130,6 +130,25 @@ struct Drive {
   return d;
 }
 
+constexpr double kTickRad = 2.0 * kPi / 1024.0;
+
+/// Adds the encoders' cumulative angles to every wheels message: the integral of the message's
+/// speeds over the 0.01 s sample period, counted in whole ticks of 2 pi / 1024.
+[[maybe_unused]] void AddWheelAngles(Drive& drive) {
+  std::vector<double> rolled;
+  for (SensorMessage& m : drive.messages) {
+    auto* wheels = std::get_if<WheelsMessage>(&m);
+    if (!wheels) continue;
+    rolled.resize(wheels->speed_radps.size(), 0.0);
+    std::vector<double> angles;
+    for (std::size_t i = 0; i < rolled.size(); ++i) {
+      rolled[i] += 0.01 * wheels->speed_radps[i];
+      angles.push_back(std::floor(rolled[i] / kTickRad) * kTickRad);
+    }
+    wheels->angle_rad = std::move(angles);
+  }
+}
+
 [[maybe_unused]] std::vector<Segment> StraightThenCircle() { return {{10.0, 1.0, 0.0, 0.0}, {30.0, 1.0, 0.0, 0.2}}; }
 
 struct Snapshot {

@@ -8,8 +8,6 @@
 namespace rowloc::localization {
 namespace {
 
-constexpr double kTickRad = 2.0 * kPi / 1024.0;
-
 FilterConfig AngleConfig(bool slip_aware) {
   FilterConfig config;
   config.slip_aware_odometry.enabled = slip_aware;
@@ -18,23 +16,6 @@ FilterConfig AngleConfig(bool slip_aware) {
   // noise of 1e-3 rad/s/sqrt(Hz).
   config.wheels.angle_rate_noise_radps_per_sqrt_hz = 1e-3;
   return config;
-}
-
-/// Adds the encoders' cumulative angles to every wheels message: the integral of the message's
-/// speeds over the 0.01 s sample period, counted in whole ticks of 2 pi / 1024.
-void AddWheelAngles(Drive& drive) {
-  std::vector<double> rolled;
-  for (SensorMessage& m : drive.messages) {
-    auto* wheels = std::get_if<WheelsMessage>(&m);
-    if (!wheels) continue;
-    rolled.resize(wheels->speed_radps.size(), 0.0);
-    std::vector<double> angles;
-    for (std::size_t i = 0; i < rolled.size(); ++i) {
-      rolled[i] += 0.01 * wheels->speed_radps[i];
-      angles.push_back(std::floor(rolled[i] / kTickRad) * kTickRad);
-    }
-    wheels->angle_rad = std::move(angles);
-  }
 }
 
 void ExpectConvergedWithAngles(const VehicleConfig& v, bool slip_aware) {

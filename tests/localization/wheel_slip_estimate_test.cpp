@@ -127,9 +127,9 @@ TEST(EstimateWheelSlip, IsSaeSlipOfEveryWheelOnTheNominalRadius) {
   }
 }
 
-TEST(EstimateWheelSlip, IgnoresTheEstimatedRollingRadius) {
-  // At constant torque only R_w (1 - kappa mu) is observable, so R_w absorbs the slip: the slip
-  // estimate must not use it (wheel_slip_estimate.hpp).
+TEST(EstimateWheelSlip, IgnoresTheEstimatedRollingRadiusUnlessAskedTo) {
+  // At constant torque only R_w (1 - kappa mu) is observable, so R_w absorbs the slip: by default
+  // the slip estimate does not use it (wheel_slip_estimate.hpp).
   const mapio::VehicleConfig vehicle = mapio::VineyardUgv4wsConfig();
   const StateLayout layout = StateLayout::For(vehicle, true);
   std::mt19937 rng(10);
@@ -138,6 +138,17 @@ TEST(EstimateWheelSlip, IgnoresTheEstimatedRollingRadius) {
   const std::vector<double> before = EstimateWheelSlip(x, vehicle, layout, omega);
   for (int index : layout.rolling_radius) x(index) *= 1.2;
   EXPECT_EQ(EstimateWheelSlip(x, vehicle, layout, omega), before);
+  // with_rolling_radius: SAE slip on each wheel's R_w state.
+  const std::vector<double> on_state = EstimateWheelSlip(x, vehicle, layout, omega, true);
+  for (std::size_t i = 0; i < omega.size(); ++i) {
+    EXPECT_DOUBLE_EQ(on_state[i], SaeSlip(omega[i], x(layout.rolling_radius[i]),
+                                          WheelLongitudinalVelocity(x, vehicle, layout, i)));
+    EXPECT_NE(on_state[i], before[i]);
+  }
+  // Without slip-aware states the flag changes nothing.
+  const StateLayout plain = StateLayout::For(vehicle, false);
+  const Eigen::VectorXd y = x.head(plain.size);
+  EXPECT_EQ(EstimateWheelSlip(y, vehicle, plain, omega, true), EstimateWheelSlip(y, vehicle, plain, omega));
 }
 
 TEST(EstimateWheelSlip, ZeroWhenTheEncodersMatchTheState) {

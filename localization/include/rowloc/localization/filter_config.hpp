@@ -67,6 +67,10 @@ struct SlipAwareOdometryConfig {
   double torque_sigma_nm = 0.0;
   /// Random walk of the traction states between torque steps, 1/sqrt(s).
   double traction_noise_per_sqrt_s = 1e-4;
+  /// The SAE slip (wheel_slip_estimate.hpp) with each wheel's R_w state instead of its nominal
+  /// radius. Worth it only where R_w is consistent (the traction states separate it from kappa,
+  /// docs/localization-filter.md §5.5), and above all on the smoothed stream (§6).
+  bool slip_with_rolling_radius = false;
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

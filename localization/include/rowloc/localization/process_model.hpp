@@ -38,8 +38,10 @@ using BaseJacobian = Eigen::Matrix<double, StateLayout::kBaseSize, StateLayout::
 BaseJacobian PropagateState(Eigen::VectorXd& state, double dt_s);
 
 /// The full prediction step: propagates state and covariance by dt_s (one step, no splitting) and
-/// adds the process noise. The heading is wrapped.
+/// adds the process noise. The heading is wrapped. base_jacobian: if given, receives F restricted to
+/// the base states (for the smoother, fixed_interval_smoother.hpp).
 void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
-                 Eigen::VectorXd& state, Eigen::MatrixXd& covariance, double dt_s);
+                 Eigen::VectorXd& state, Eigen::MatrixXd& covariance, double dt_s,
+                 BaseJacobian* base_jacobian = nullptr);
 
 }  // namespace rowloc::localization

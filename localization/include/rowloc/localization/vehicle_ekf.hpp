@@ -25,6 +25,7 @@
 
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/fixed_interval_smoother.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/measurement_models.hpp"
@@ -113,6 +114,22 @@ class VehicleEkf {
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
 
+  /// Fixed-interval smoothing (fixed_interval_smoother.hpp, docs/localization-filter.md §6): from
+  /// now on the filter records its pass, each (re-)initialisation starting a new chain.
+  /// check_transitions: also check every recorded transition (costly; for tests).
+  /// Throws std::logic_error when already enabled.
+  void EnableSmoothing(bool check_transitions = false);
+  /// Asks for the smoothed state at the filter's current time; returns the index of this mark in
+  /// FinishSmoothing's result. std::logic_error unless smoothing is enabled and the filter initialised.
+  std::size_t MarkForSmoothing();
+  /// Ends the recording (smoothing is then disabled) and returns the smoothed state of every mark,
+  /// with R_w and kappa kept in their domains as the filter keeps its own (ProjectStates: the
+  /// smoother is linear and may cross kappa = 0 where kappa is weakly observable).
+  /// std::logic_error unless enabled; std::runtime_error from the smoother (fixed_interval_smoother.hpp).
+  std::vector<SmoothedState> FinishSmoothing();
+  /// The recorder while smoothing is enabled, else null.
+  const FixedIntervalSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
+
   bool initialised() const { return initialised_; }
   double time_s() const { return time_s_; }
   const Eigen::VectorXd& state() const { return x_; }
@@ -158,8 +175,14 @@ class VehicleEkf {
   /// without torques, with before_wheel_model and traction_from_acceleration, the acceleration's
   /// (WheelTractionCoefficient); else none.
   void ProjectStates(bool before_wheel_model = false);
+  /// R_w within [0.5, 1.5] x nominal and kappa >= 0 (the part of ProjectStates that needs no mu;
+  /// applied to smoothed states too).
+  void ClampCalibrationStates(Eigen::VectorXd& x) const;
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
+  /// For the smoother: the state is about to change other than by an update; rows_reset, if any,
+  /// are set anew (re-anchored: their transition rows are zero).
+  void BeginTransition(const std::vector<int>& rows_reset = {});
 
   mapio::VehicleConfig vehicle_;
   FilterConfig config_;
@@ -201,6 +224,7 @@ class VehicleEkf {
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
+  std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
 };
 
 }  // namespace rowloc::localization
