@@ -341,27 +341,24 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
     if (d >= 0) x_(d) = WrapAngle(x_(d));
   }
   if (!layout_.slip_aware()) return;
-  ClampCalibrationStates(x_);
   const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
   // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
   // model linearizes 1 / (1 - kappa mu): checked there, not after every message.
   const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration;
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
+    ClampWheelCalibration(x_, i);
     const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
     double& kappa = x_(layout_.slip_compliance[i]);
     if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);
   }
 }
 
-void VehicleEkf::ClampCalibrationStates(Eigen::VectorXd& x) const {
-  if (!layout_.slip_aware()) return;
-  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
-    const double nominal = vehicle_.wheels[i].nominal_radius_m;
-    double& radius = x(layout_.rolling_radius[i]);
-    radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
-    double& kappa = x(layout_.slip_compliance[i]);
-    kappa = std::max(kappa, 0.0);
-  }
+void VehicleEkf::ClampWheelCalibration(Eigen::VectorXd& x, std::size_t wheel) const {
+  const double nominal = vehicle_.wheels[wheel].nominal_radius_m;
+  double& radius = x(layout_.rolling_radius[wheel]);
+  radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
+  double& kappa = x(layout_.slip_compliance[wheel]);
+  kappa = std::max(kappa, 0.0);
 }
 
 }  // namespace rowloc::localization

@@ -235,7 +235,9 @@ std::vector<SmoothedState> VehicleEkf::FinishSmoothing() {
   const FixedIntervalSmoother recorded = std::move(*smoother_);
   smoother_.reset();
   std::vector<SmoothedState> smoothed = recorded.Smooth();
-  for (SmoothedState& s : smoothed) ClampCalibrationStates(s.state);
+  for (SmoothedState& s : smoothed) {
+    for (std::size_t i = 0; layout_.slip_aware() && i < layout_.wheel_count(); ++i) ClampWheelCalibration(s.state, i);
+  }
   return smoothed;
 }
 

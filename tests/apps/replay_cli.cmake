@@ -81,3 +81,24 @@ set_tests_properties(apps.replay_writes_echo_log PROPERTIES FIXTURES_REQUIRED si
 rowloc_cli_test(replay_echo_log_needs_map OFF "--echo-log needs --map"
                 replay ${_logs}/vineyard-002-1us-echoes.ndjson --vehicle ${_ugv} --echo-log ${_replay_out}/x-echoes.ndjson
                 -o ${_replay_out}/x.ndjson)
+# --smoothed: the fixed-interval smoothed stream at the same times (docs/localization-filter.md §6),
+# which rowloc evaluate reads like the filtered one; with wheel-angles.json on the tiles run.
+rowloc_cli_test(replay_writes_smoothed_stream ON "smoothed\\.ndjson: [1-9][0-9]+ smoothed estimates over [1-9][0-9]+ filter nodes"
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/config/filters/wheel-angles.json
+                -o ${_replay_out}/tiles-filtered.ndjson --smoothed ${_replay_out}/tiles-smoothed.ndjson)
+set_tests_properties(apps.replay_writes_smoothed_stream PROPERTIES FIXTURES_REQUIRED simulate_tiles
+                     FIXTURES_SETUP replay_smoothed)
+rowloc_cli_test(replay_smoothed_stream_evaluates ON "position, total \\[m\\] +[0-9]+ +0\\.00[0-4]"
+                evaluate ${_sim_out}/tiles-a/truth.ndjson ${_replay_out}/tiles-smoothed.ndjson --clip-to-truth
+                -o ${_replay_out}/tiles-smoothed-report --no-plots)
+rowloc_cli_reproducible_test(replay_smoothed_is_deterministic ${_replay_out}/tiles-smoothed-2.ndjson
+                             ${_replay_out}/tiles-smoothed.ndjson
+                             replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                             --filter ${PROJECT_SOURCE_DIR}/config/filters/wheel-angles.json
+                             -o ${_replay_out}/tiles-filtered-2.ndjson --smoothed ${_replay_out}/tiles-smoothed-2.ndjson)
+set_tests_properties(apps.replay_smoothed_stream_evaluates apps.replay_smoothed_is_deterministic
+                     PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_smoothed")
+rowloc_cli_test(replay_rejects_smoothed_over_output OFF "--smoothed: the same file as --output"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
+                -o ${_replay_out}/x.ndjson --smoothed ${_replay_out}/x.ndjson)

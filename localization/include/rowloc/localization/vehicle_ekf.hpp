@@ -175,9 +175,9 @@ class VehicleEkf {
   /// without torques, with before_wheel_model and traction_from_acceleration, the acceleration's
   /// (WheelTractionCoefficient); else none.
   void ProjectStates(bool before_wheel_model = false);
-  /// R_w within [0.5, 1.5] x nominal and kappa >= 0 (the part of ProjectStates that needs no mu;
-  /// applied to smoothed states too).
-  void ClampCalibrationStates(Eigen::VectorXd& x) const;
+  /// Wheel `wheel`'s R_w within [0.5, 1.5] x nominal and kappa >= 0 (the part of ProjectStates
+  /// that needs no mu; applied to smoothed states too). The layout must be slip-aware.
+  void ClampWheelCalibration(Eigen::VectorXd& x, std::size_t wheel) const;
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
   /// For the smoother: the state is about to change other than by an update; rows_reset, if any,
