@@ -84,22 +84,21 @@ void CheckTimeOrder(const char* type, double time_s, double& last_time_s) {
 }
 
 /// `wheel_calibration`: {wheel: {rolling_radius_m, rolling_radius_sigma_m, slip_compliance,
-/// slip_compliance_sigma}}; unique non-empty names, finite values, R_w > 0, kappa and sigmas >= 0.
+/// slip_compliance_sigma}}; unique non-empty names, each number finite and in its domain
+/// (kWheelCalibrationFields: R_w > 0, kappa and sigmas >= 0).
 ordered_json CalibrationJson(const char* type, const std::vector<WheelCalibrationRecord>& wheels) {
   ordered_json out = ordered_json::object();
   for (const WheelCalibrationRecord& w : wheels) {
     if (w.wheel.empty() || out.contains(w.wheel)) Refuse(type, "wheel_calibration names must be unique and non-empty");
-    const double radius = Finite(type, "rolling_radius_m", w.rolling_radius_m);
-    const double radius_sigma = Finite(type, "rolling_radius_sigma_m", w.rolling_radius_sigma_m);
-    const double kappa = Finite(type, "slip_compliance", w.slip_compliance);
-    const double kappa_sigma = Finite(type, "slip_compliance_sigma", w.slip_compliance_sigma);
-    if (radius <= 0.0 || radius_sigma < 0.0 || kappa < 0.0 || kappa_sigma < 0.0) {
-      Refuse(type, "wheel_calibration of '" + w.wheel + "': radius must be > 0, compliance and sigmas >= 0");
+    ordered_json numbers = ordered_json::object();
+    for (const WheelCalibrationField& field : kWheelCalibrationFields) {
+      const double value = Finite(type, field.key, w.*field.member);
+      if (!field.InDomain(value)) {
+        Refuse(type, "wheel_calibration of '" + w.wheel + "': " + field.key + " " + field.DomainText());
+      }
+      numbers[field.key] = value;
     }
-    out[w.wheel] = {{"rolling_radius_m", radius},
-                    {"rolling_radius_sigma_m", radius_sigma},
-                    {"slip_compliance", kappa},
-                    {"slip_compliance_sigma", kappa_sigma}};
+    out[w.wheel] = std::move(numbers);
   }
   return out;
 }

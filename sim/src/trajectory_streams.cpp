@@ -119,7 +119,7 @@ void ParseTruthWheels(const json& value, const LineContext& ctx, TruthSample& ou
 }
 
 /// Estimate "wheel_calibration": {name: {rolling_radius_m, rolling_radius_sigma_m, slip_compliance,
-/// slip_compliance_sigma}}, all required, R_w > 0, the others >= 0.
+/// slip_compliance_sigma}}, all required, each in its domain (kWheelCalibrationFields).
 std::vector<WheelCalibrationRecord> WheelCalibration(const json& value, const LineContext& ctx) {
   const std::string key = "wheel_calibration";
   if (!value.is_object()) ctx.Fail(key, "expected an object, got " + std::string(value.type_name()));
@@ -127,16 +127,14 @@ std::vector<WheelCalibrationRecord> WheelCalibration(const json& value, const Li
   for (const auto& [name, wheel] : value.items()) {  // nlohmann::json objects iterate sorted by key
     const std::string prefix = key + "." + name + ".";
     if (!wheel.is_object()) ctx.Fail(key + "." + name, "expected an object, got " + std::string(wheel.type_name()));
-    const auto number = [&](const char* field, bool positive) {
-      const double v = ToFiniteNumber(Require(wheel, field, ctx, prefix), prefix + field, ctx);
-      if (positive ? v <= 0.0 : v < 0.0) ctx.Fail(prefix + field, positive ? "must be > 0" : "must be >= 0");
-      return v;
-    };
-    out.push_back({.wheel = name,
-                   .rolling_radius_m = number("rolling_radius_m", true),
-                   .rolling_radius_sigma_m = number("rolling_radius_sigma_m", false),
-                   .slip_compliance = number("slip_compliance", false),
-                   .slip_compliance_sigma = number("slip_compliance_sigma", false)});
+    WheelCalibrationRecord record{.wheel = name};
+    for (const WheelCalibrationField& field : kWheelCalibrationFields) {
+      const std::string path = prefix + field.key;
+      const double v = ToFiniteNumber(Require(wheel, field.key, ctx, prefix), path, ctx);
+      if (!field.InDomain(v)) ctx.Fail(path, field.DomainText());
+      record.*field.member = v;
+    }
+    out.push_back(std::move(record));
   }
   return out;
 }

@@ -266,17 +266,22 @@ TEST(EstimateLogWriter, WheelCalibrationIsWrittenPerWheelAndBadValuesAreRefused)
   std::istringstream in(out.str());
   EXPECT_EQ(ParseEstimateStream(in, "written").estimates.size(), 1u);  // readers skip the key
   const std::string written = out.str();
-  const auto refused = [&](WheelCalibrationRecord w) {
+  const auto refused = [&](WheelCalibrationRecord w, const std::string& reason) {
     EstimateRecord bad = r;
     bad.time_s = 2.0;
     bad.wheel_calibration = {w};
-    EXPECT_THROW(writer.Write(bad), std::invalid_argument) << w.wheel;
+    try {
+      writer.Write(bad);
+      ADD_FAILURE() << "written: " << reason;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(reason), std::string::npos) << e.what();
+    }
   };
-  refused({"", 0.16, 0.0, 1.0, 0.0});
-  refused({"left", 0.0, 0.0, 1.0, 0.0});
-  refused({"left", 0.16, -0.001, 1.0, 0.0});
-  refused({"left", 0.16, 0.0, -0.1, 0.0});
-  refused({"left", 0.16, 0.0, 1.0, std::numeric_limits<double>::quiet_NaN()});
+  refused({"", 0.16, 0.0, 1.0, 0.0}, "unique and non-empty");
+  refused({"left", 0.0, 0.0, 1.0, 0.0}, "'left': rolling_radius_m must be > 0");
+  refused({"left", 0.16, -0.001, 1.0, 0.0}, "rolling_radius_sigma_m must be >= 0");
+  refused({"left", 0.16, 0.0, -0.1, 0.0}, "slip_compliance must be >= 0");
+  refused({"left", 0.16, 0.0, 1.0, std::numeric_limits<double>::quiet_NaN()}, "slip_compliance_sigma");
   EstimateRecord twice = r;
   twice.time_s = 2.0;
   twice.wheel_calibration = {{"left", 0.16, 0.0, 1.0, 0.0}, {"left", 0.16, 0.0, 1.0, 0.0}};
