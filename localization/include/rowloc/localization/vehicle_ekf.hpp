@@ -21,6 +21,8 @@
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
 // out, the filter (not the receiver) is taken to have drifted: the position covariance is inflated
 // by the innovation's outer product and the fix is applied (reported as a notice).
+// Smoothing (EnableSmoothing, off by default): the filter records every transition and update for
+// the fixed-interval smoother (fixed_interval_smoother.hpp); the filter's own results do not change.
 #pragma once
 
 #include "rowloc/geometry/row_map.hpp"
