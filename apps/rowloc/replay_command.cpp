@@ -12,6 +12,9 @@
 // (fixed_interval_smoother.hpp; docs/localization-filter.md §6): every line then uses every
 // measurement of the log, before and after it. Their slip is the same estimator on the smoothed
 // state and the raw encoder speeds of that time; skid-steer track slip is the observer's, unsmoothed.
+// --calibration ESTIMATES: the R_w and kappa priors of every wheel from a previous drive (the last
+// `wheel_calibration` of that estimate stream, e.g. its --smoothed output) instead of the filter
+// file's nominal ones (VehicleEkf::SetWheelCalibrationPrior).
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -25,6 +28,7 @@
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/log_writers.hpp"
+#include "rowloc/sim/trajectory_streams.hpp"
 
 #include <nlohmann/json.hpp>
 #include <spdlog/fmt/ranges.h>
@@ -52,6 +56,7 @@ struct ReplayOptions {
   std::string map_path;
   std::string echo_log_path;  ///< --echo-log: one NDJSON line per echo (EchoTrace)
   std::string smoothed_path;  ///< --smoothed: the fixed-interval smoothed estimate stream
+  std::string calibration_path;  ///< --calibration: an estimate stream of a previous drive
   std::string output_path;
   double period_s = 0.1;
   bool no_updates = false;
@@ -141,6 +146,22 @@ sim::EstimateRecord EstimateOf(const localization::VehicleEkf& ekf, double time_
   return record;
 }
 
+/// The last `wheel_calibration` of an estimate stream, as priors (sigmas as written).
+std::vector<localization::WheelCalibrationPrior> CalibrationPriorFrom(const std::string& path) {
+  const sim::EstimateStream stream = sim::ReadEstimateStream(path);
+  const auto last = std::find_if(stream.estimates.rbegin(), stream.estimates.rend(),
+                                 [](const sim::EstimateSample& e) { return !e.wheel_calibration.empty(); });
+  if (last == stream.estimates.rend()) {
+    throw std::runtime_error(path + ": no estimate with a wheel_calibration (a slip-aware replay writes one)");
+  }
+  std::vector<localization::WheelCalibrationPrior> prior;
+  for (const sim::WheelCalibrationRecord& w : last->wheel_calibration) {
+    prior.push_back({w.wheel, w.rolling_radius_m, w.rolling_radius_sigma_m, w.slip_compliance, w.slip_compliance_sigma});
+  }
+  spdlog::info("wheel calibration prior from {} (t={} s, line {})", path, last->t_s, last->line);
+  return prior;
+}
+
 /// --smoothed: what each estimate line needs besides the smoothed state (its time, the raw
 /// encoder speeds and the track slip of that moment), then the smoothed stream.
 class SmoothedStream {
@@ -213,6 +234,13 @@ void RunReplay(const ReplayOptions& o) {
       ekf.AttachRowMap(mapio::ReadRowMapGeoJson(o.map_path));
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(o.map_path + ": " + e.what());
+    }
+  }
+  if (!o.calibration_path.empty()) {
+    try {
+      ekf.SetWheelCalibrationPrior(CalibrationPriorFrom(o.calibration_path));
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(o.calibration_path + ": " + e.what());
     }
   }
   std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
@@ -328,6 +356,8 @@ void RegisterReplayCommand(CLI::App& app) {
   cmd->add_option("--echo-log", o->echo_log_path,
                   "With --map: one NDJSON line per echo, the position ellipse before and after it");
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
+  cmd->add_option("--calibration", o->calibration_path,
+                  "Estimate stream of a previous drive: its last wheel_calibration as the R_w and kappa priors");
   cmd->add_option("--smoothed", o->smoothed_path,
                   "Also write the fixed-interval (RTS) smoothed estimates, same times and format (post-run)");
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);

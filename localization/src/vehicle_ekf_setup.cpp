@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <utility>
@@ -157,10 +158,13 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
       if (i < last_steering_rad_.size() && last_steering_rad_[i]) x_(d) = *last_steering_rad_[i];
     }
     if (const int r = layout_.rolling_radius[i]; r >= 0) {
-      x_(r) = vehicle_.wheels[i].nominal_radius_m;
-      variance(r) = slip.rolling_radius_sigma_m * slip.rolling_radius_sigma_m;
-      x_(layout_.slip_compliance[i]) = slip.slip_compliance_initial;
-      variance(layout_.slip_compliance[i]) = slip.slip_compliance_sigma * slip.slip_compliance_sigma;
+      const WheelCalibrationPrior* prior = calibration_prior_.empty() ? nullptr : &calibration_prior_[i];
+      const double radius_sigma = prior ? prior->rolling_radius_sigma_m : slip.rolling_radius_sigma_m;
+      const double kappa_sigma = prior ? prior->slip_compliance_sigma : slip.slip_compliance_sigma;
+      x_(r) = prior ? prior->rolling_radius_m : vehicle_.wheels[i].nominal_radius_m;
+      variance(r) = radius_sigma * radius_sigma;
+      x_(layout_.slip_compliance[i]) = prior ? prior->slip_compliance : slip.slip_compliance_initial;
+      variance(layout_.slip_compliance[i]) = kappa_sigma * kappa_sigma;
     }
   }
   if (layout_.accel_bias >= 0) {
@@ -175,11 +179,16 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
     }
   }
   p_.diagonal() = variance;
-  if (layout_.slip_aware()) {  // correlated kappas (one terrain)
-    const double covariance = slip.slip_compliance_wheel_correlation * slip.slip_compliance_sigma * slip.slip_compliance_sigma;
-    for (const int a : layout_.slip_compliance) {
-      for (const int b : layout_.slip_compliance) {
-        if (a != b) p_(a, b) = covariance;
+  if (layout_.slip_aware()) {  // correlated kappas (one terrain): rho sigma_a sigma_b
+    const auto sigma = [&](std::size_t i) {
+      return calibration_prior_.empty() ? slip.slip_compliance_sigma : calibration_prior_[i].slip_compliance_sigma;
+    };
+    for (std::size_t a = 0; a < layout_.wheel_count(); ++a) {
+      for (std::size_t b = 0; b < layout_.wheel_count(); ++b) {
+        if (a != b) {
+          p_(layout_.slip_compliance[a], layout_.slip_compliance[b]) =
+              slip.slip_compliance_wheel_correlation * sigma(a) * sigma(b);
+        }
       }
     }
   }
@@ -211,6 +220,39 @@ void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Mat
   p_.topRows<3>().setZero();
   p_.leftCols<3>().setZero();
   p_.topLeftCorner<3, 3>() = symmetric;
+}
+
+void VehicleEkf::SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrior>& wheels) {
+  if (!layout_.slip_aware()) {
+    throw std::invalid_argument("wheel calibration prior: the filter has no slip-aware states (slip_aware_odometry.enabled)");
+  }
+  std::vector<std::optional<WheelCalibrationPrior>> ordered(vehicle_.wheels.size());
+  for (const WheelCalibrationPrior& w : wheels) {
+    const auto it = std::find_if(vehicle_.wheels.begin(), vehicle_.wheels.end(),
+                                 [&](const mapio::WheelGeometry& g) { return g.name == w.wheel; });
+    if (it == vehicle_.wheels.end()) {
+      throw std::invalid_argument("wheel calibration prior: '" + w.wheel + "' is not a wheel of '" + vehicle_.name + "'");
+    }
+    auto& slot = ordered[static_cast<std::size_t>(it - vehicle_.wheels.begin())];
+    if (slot) throw std::invalid_argument("wheel calibration prior: '" + w.wheel + "' appears twice");
+    const bool valid = std::isfinite(w.rolling_radius_m) && w.rolling_radius_m > 0.0 &&
+                       std::isfinite(w.rolling_radius_sigma_m) && w.rolling_radius_sigma_m > 0.0 &&
+                       std::isfinite(w.slip_compliance) && w.slip_compliance >= 0.0 &&
+                       std::isfinite(w.slip_compliance_sigma) && w.slip_compliance_sigma > 0.0;
+    if (!valid) {
+      throw std::invalid_argument("wheel calibration prior of '" + w.wheel +
+                                  "': R_w and the sigmas must be finite and > 0, kappa finite and >= 0");
+    }
+    slot = w;
+  }
+  std::vector<WheelCalibrationPrior> prior;
+  for (std::size_t i = 0; i < ordered.size(); ++i) {
+    if (!ordered[i]) {
+      throw std::invalid_argument("wheel calibration prior: no entry for '" + vehicle_.wheels[i].name + "'");
+    }
+    prior.push_back(*ordered[i]);
+  }
+  calibration_prior_ = std::move(prior);
 }
 
 void VehicleEkf::EnableSmoothing(bool check_transitions) {

@@ -102,3 +102,20 @@ set_tests_properties(apps.replay_smoothed_stream_evaluates apps.replay_smoothed_
 rowloc_cli_test(replay_rejects_smoothed_over_output OFF "--smoothed: the same file as --output"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
                 -o ${_replay_out}/x.ndjson --smoothed ${_replay_out}/x.ndjson)
+# --calibration: the wheel calibration of a previous drive (the smoothed tiles run above) as the prior;
+# an estimate stream without one (the GNSS baseline) is refused.
+rowloc_cli_test(replay_takes_a_calibration_prior ON "wheel calibration prior from .*tiles-smoothed\\.ndjson \\(t="
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/config/filters/wheel-angles.json
+                --calibration ${_replay_out}/tiles-smoothed.ndjson -o ${_replay_out}/tiles-calibrated.ndjson)
+set_tests_properties(apps.replay_takes_a_calibration_prior PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_smoothed")
+rowloc_cli_test(replay_rejects_a_stream_without_calibration OFF "no estimate with a wheel_calibration"
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                --calibration ${_sim_out}/tiles-a/baseline-gnss.ndjson -o ${_replay_out}/x.ndjson)
+set_tests_properties(apps.replay_rejects_a_stream_without_calibration PROPERTIES FIXTURES_REQUIRED simulate_tiles)
+rowloc_cli_test(replay_rejects_a_calibration_without_slip_states OFF "no slip-aware states"
+                replay ${_sim_out}/tiles-a/sensors.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/config/filters/no-slip-model.json
+                --calibration ${_replay_out}/tiles-smoothed.ndjson -o ${_replay_out}/x.ndjson)
+set_tests_properties(apps.replay_rejects_a_calibration_without_slip_states
+                     PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_smoothed")

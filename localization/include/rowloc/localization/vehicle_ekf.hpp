@@ -82,6 +82,17 @@ struct EchoTrace {
   std::optional<geometry::Segment2> segment;  ///< the row segment of the chosen candidate
   std::optional<EdgeLine> line;               ///< its local straight row (normal towards the sensor)
 };
+/// One wheel's slip-aware calibration from a previous drive (e.g. the last `wheel_calibration` of
+/// an estimate stream, docs/protocol.md §3): the prior of R_w and kappa at initialisation instead
+/// of the filter file's (nominal radius, slip_compliance_initial).
+struct WheelCalibrationPrior {
+  std::string wheel;
+  double rolling_radius_m = 0.0;        ///< > 0
+  double rolling_radius_sigma_m = 0.0;  ///< > 0 (a zero prior variance would freeze the state)
+  double slip_compliance = 0.0;         ///< kappa >= 0
+  double slip_compliance_sigma = 0.0;   ///< > 0
+};
+
 struct ProcessResult {
   /// The updates made (none before initialisation; at most two per message, kept inline: a
   /// message costs no heap allocation for them).
@@ -115,6 +126,12 @@ class VehicleEkf {
   const geometry::SegmentQueryCache& row_search_cache() const { return candidate_buffers_.query_cache; }
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
+  /// The R_w and kappa priors of every wheel, from a previous drive, used at every (re-)initialisation
+  /// from now on (the kappas keep the filter file's correlation, with these sigmas); an initialised
+  /// filter keeps its states. One entry per wheel of the vehicle, by name, in any order. Throws
+  /// std::invalid_argument without slip-aware states, for a missing, unknown or repeated wheel, or
+  /// a value outside its domain (non-finite, R_w or a sigma <= 0, kappa < 0).
+  void SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrior>& wheels);
 
   /// Fixed-interval smoothing (fixed_interval_smoother.hpp, docs/localization-filter.md §6): from
   /// now on the filter records its pass, each (re-)initialisation starting a new chain.
@@ -227,6 +244,7 @@ class VehicleEkf {
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
   std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
+  std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, or empty: the filter file's
 };
 
 }  // namespace rowloc::localization
