@@ -167,7 +167,7 @@ std::vector<localization::WheelCalibrationPrior> CalibrationPriorFrom(const std:
 class SmoothedStream {
  public:
   void Keep(const localization::VehicleEkf& ekf, const sim::EstimateRecord& filtered) {
-    kept_.push_back({filtered, ekf.last_wheel_speeds_radps()});
+    kept_.push_back({filtered.slip, ekf.last_wheel_speeds_radps()});
   }
   /// Writes one smoothed line per kept one; returns the number written.
   std::size_t Write(localization::VehicleEkf& ekf, const TrackSlipTap& tracks, sim::EstimateLogWriter& writer) {
@@ -176,7 +176,7 @@ class SmoothedStream {
     for (std::size_t i = 0; i < kept_.size(); ++i) {
       sim::EstimateRecord record =
           EstimateOf(ekf, smoothed[i].time_s, smoothed[i].state, smoothed[i].covariance, kept_[i].speeds_radps, tracks);
-      if (tracks.active()) record.slip = kept_[i].filtered.slip;  // the observer's at that time
+      if (tracks.active()) record.slip = kept_[i].track_slip;  // the observer's at that time
       writer.Write(record);
     }
     return kept_.size();
@@ -184,7 +184,7 @@ class SmoothedStream {
 
  private:
   struct Kept {
-    sim::EstimateRecord filtered;
+    std::vector<std::pair<std::string, double>> track_slip;  ///< the filtered line's (observer's) slip
     std::vector<double> speeds_radps;
   };
   std::vector<Kept> kept_;
