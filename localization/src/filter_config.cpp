@@ -45,6 +45,8 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, Domain::kNonNegative},
       {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, Domain::kNonNegative},
       {"slip_aware_odometry.slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation, Domain::kFraction},
+      {"slip_aware_odometry.rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation,
+       Domain::kFraction},
       {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
       {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
@@ -72,6 +74,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"wheels.encoder_low_pass_time_constant_s", c.wheels.encoder_low_pass_time_constant_s, Domain::kNonNegative},
       {"wheels.angle_sigma_rad", c.wheels.angle_sigma_rad},
       {"wheels.angle_rate_noise_radps_per_sqrt_hz", c.wheels.angle_rate_noise_radps_per_sqrt_hz},
+      {"wheels.angle_max_prediction_sigma_rad", c.wheels.angle_max_prediction_sigma_rad},
       {"steering.angle_sigma_rad", c.steering.angle_sigma_rad},
       {"steering.gate_probability", c.steering.gate_probability, Domain::kProbability},
       {"vio.sigma_scale", c.vio.sigma_scale},
@@ -111,6 +114,7 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Number("slip_compliance_initial"), s.Number("slip_compliance_sigma"),
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
                              s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
+                             s.Number("rolling_radius_noise_wheel_correlation"),
                              s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
                              s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius")};
     s.RejectUnknownKeys();
@@ -142,7 +146,7 @@ FilterConfig ReadConfig(Reader& root) {
                 w.Number("lateral_velocity_sigma_mps"), w.Number("gate_probability"),
                 w.Number("max_speed_radps"), w.Number("encoder_low_pass_time_constant_s"),
                 w.Bool("angle_measurement"), w.Number("angle_sigma_rad"),
-                w.Number("angle_rate_noise_radps_per_sqrt_hz")};
+                w.Number("angle_rate_noise_radps_per_sqrt_hz"), w.Number("angle_max_prediction_sigma_rad")};
     w.RejectUnknownKeys();
   }
   {

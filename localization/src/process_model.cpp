@@ -4,6 +4,8 @@
 
 #include "column_kernels.hpp"
 
+#include <boost/container/small_vector.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -58,6 +60,26 @@ double WheelDistance(const mapio::WheelGeometry& wheel, const Twist& twist, doub
   return std::sqrt(wx * wx + wy * wy) * dt;  // speeds: no overflow to guard against (std::hypot is slower)
 }
 
+/// Per wheel, inline up to eight wheels: a prediction step allocates nothing on the heap.
+using WheelDistances = boost::container::small_vector<double, 8>;
+
+/// A random walk per metre rolled of one state per wheel (R_w or kappa), correlated rho between
+/// wheels: Q = q^2 D^1/2 C D^1/2, D the wheels' distances this step and C the correlation matrix
+/// (1 on its diagonal, rho off it).
+void AddWheelRandomWalk(const std::vector<int>& states, const WheelDistances& distance_m, double q,
+                        double rho, Eigen::MatrixXd& p) {
+  const double q2 = q * q;
+  for (std::size_t i = 0; i < states.size(); ++i) {
+    p(states[i], states[i]) += q2 * distance_m[i];
+    if (rho == 0.0) continue;
+    for (std::size_t j = 0; j < i; ++j) {
+      const double shared = rho * q2 * std::sqrt(distance_m[i] * distance_m[j]);
+      p(states[i], states[j]) += shared;
+      p(states[j], states[i]) += shared;
+    }
+  }
+}
+
 void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
                      const Twist& twist, Eigen::MatrixXd& p, double dt) {
   const ProcessNoise& q = config.process_noise;
@@ -84,21 +106,12 @@ void AddProcessNoise(const mapio::VehicleConfig& vehicle, const StateLayout& lay
     const double traction = s.traction_noise_per_sqrt_s * s.traction_noise_per_sqrt_s * dt;
     for (const int k : layout.traction) p(k, k) += traction;
   }
-  // kappa: q^2 sqrt(d_i d_j) (rho off the diagonal): Q = q^2 D^1/2 C D^1/2, C the correlation matrix.
-  const double kappa_q2 = s.slip_compliance_noise_per_sqrt_m * s.slip_compliance_noise_per_sqrt_m;
-  const double rho = s.slip_compliance_wheel_correlation;
-  for (std::size_t i = 0; i < layout.wheel_count(); ++i) {
-    const double distance = WheelDistance(vehicle.wheels[i], twist, dt);
-    p(layout.rolling_radius[i], layout.rolling_radius[i]) +=
-        s.rolling_radius_noise_m_per_sqrt_m * s.rolling_radius_noise_m_per_sqrt_m * distance;
-    p(layout.slip_compliance[i], layout.slip_compliance[i]) += kappa_q2 * distance;
-    if (rho == 0.0) continue;
-    for (std::size_t j = 0; j < i; ++j) {
-      const double shared = rho * kappa_q2 * std::sqrt(distance * WheelDistance(vehicle.wheels[j], twist, dt));
-      p(layout.slip_compliance[i], layout.slip_compliance[j]) += shared;
-      p(layout.slip_compliance[j], layout.slip_compliance[i]) += shared;
-    }
-  }
+  WheelDistances distance(layout.wheel_count());
+  for (std::size_t i = 0; i < distance.size(); ++i) distance[i] = WheelDistance(vehicle.wheels[i], twist, dt);
+  AddWheelRandomWalk(layout.rolling_radius, distance, s.rolling_radius_noise_m_per_sqrt_m,
+                     s.rolling_radius_noise_wheel_correlation, p);
+  AddWheelRandomWalk(layout.slip_compliance, distance, s.slip_compliance_noise_per_sqrt_m,
+                     s.slip_compliance_wheel_correlation, p);
 }
 
 /// The rows of F other than the identity's (the states whose step depends on others) and the

@@ -268,6 +268,19 @@ bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& re
   // speeds are used instead.
   if (wheel_angles_anchored_ && z == last_wheel_angles_) return false;
   last_wheel_angles_ = z;
+  // Until the wheel rates are known to about a tick per sample, the speeds (their wider noise)
+  // carry the wheels: a precise angle linearized far from the truth can drive the filter away
+  // (docs/localization-filter.md §5.7). The angles are re-anchored so that they start from here.
+  if (wheel_angles_anchored_) {
+    const double max_sigma = config_.wheels.angle_max_prediction_sigma_rad;
+    const double max_variance = max_sigma * max_sigma;
+    for (const int k : layout_.wheel_angle) {
+      if (p_(k, k) > max_variance) {
+        AnchorWheelAngles(z);
+        return false;
+      }
+    }
+  }
   if (wheel_angles_anchored_) {
     WheelAngleModel(x_, layout_, b.wheels);
     const double s = config_.wheels.angle_sigma_rad;
@@ -279,12 +292,18 @@ bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& re
     if (result.updates.back().outcome.accepted) return true;
     result.notice = "wheel angles gated out at t=" + std::to_string(wheels.time_s) + " s: re-anchored to the encoders";
   }
-  // Anchor (first angles since initialisation, or after a gated-out update): theta = z with the
-  // quantization variance, uncorrelated with the other states. Only the angle's offset is lost.
-  const double variance = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
-  for (std::size_t i = 0; i < n; ++i) Reanchor(layout_.wheel_angle[i], z(static_cast<Eigen::Index>(i)), variance);
-  wheel_angles_anchored_ = true;
+  // Anchor (first angles since initialisation, or after a gated-out update). Only the angle's
+  // offset is lost.
+  AnchorWheelAngles(z);
   return true;
+}
+
+void VehicleEkf::AnchorWheelAngles(const Eigen::VectorXd& z) {
+  const double variance = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
+  for (std::size_t i = 0; i < layout_.wheel_angle.size(); ++i) {
+    Reanchor(layout_.wheel_angle[i], z(static_cast<Eigen::Index>(i)), variance);
+  }
+  wheel_angles_anchored_ = true;
 }
 
 ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {

@@ -49,6 +49,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.rolling_radius_noise_m_per_sqrt_m, sb.rolling_radius_noise_m_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_wheel_correlation, sb.slip_compliance_wheel_correlation);
+  EXPECT_EQ(sa.rolling_radius_noise_wheel_correlation, sb.rolling_radius_noise_wheel_correlation);
   EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
   EXPECT_EQ(sa.traction_noise_per_sqrt_s, sb.traction_noise_per_sqrt_s);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
@@ -81,6 +82,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.wheels.angle_measurement, b.wheels.angle_measurement);
   EXPECT_EQ(a.wheels.angle_sigma_rad, b.wheels.angle_sigma_rad);
   EXPECT_EQ(a.wheels.angle_rate_noise_radps_per_sqrt_hz, b.wheels.angle_rate_noise_radps_per_sqrt_hz);
+  EXPECT_EQ(a.wheels.angle_max_prediction_sigma_rad, b.wheels.angle_max_prediction_sigma_rad);
   EXPECT_EQ(a.steering.angle_sigma_rad, b.steering.angle_sigma_rad);
   EXPECT_EQ(a.steering.gate_probability, b.steering.gate_probability);
   EXPECT_EQ(a.vio.position_m, b.vio.position_m);
@@ -159,14 +161,15 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
   EXPECT_EQ(FilterConfig{}.map_aided.method, MapAidedMethod::kRange);  // the default is consistent
 }
 
-TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheKappaWalkTheTorqueNoiseAndTheSlipRadius) {
+TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheWalksTheTorqueNoiseAndTheSlipRadius) {
   // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4);
-  // R_w consistent there, so the slip uses it (§6).
+  // R_w consistent there, so the slip uses it (§6); the radii drift together (§5.6).
   FilterConfig expected;
   expected.name = "wheel-angles";
   expected.wheels.angle_measurement = true;
   expected.slip_aware_odometry.slip_compliance_noise_per_sqrt_m = 0.0;
   expected.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9999;
+  expected.slip_aware_odometry.rolling_radius_noise_wheel_correlation = 0.99;
   expected.slip_aware_odometry.torque_sigma_nm = 0.05;  // the simulated torque sensor's noise
   expected.slip_aware_odometry.slip_with_rolling_radius = true;
   ExpectEqualConfigs(LoadFilterConfig(FilterFile("wheel-angles")), expected);
@@ -193,7 +196,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 60u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 62u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -283,11 +286,12 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
 }
 
 /// Numeric keys for which 0 is valid: no encoder filter, calibration states that do not drift,
-/// independent wheels' kappas.
+/// independent wheels' kappas and radius walks.
 const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
                                           "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_wheel_correlation",
+                                          "slip_aware_odometry.rolling_radius_noise_wheel_correlation",
                                           "slip_aware_odometry.torque_sigma_nm"};
 
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
@@ -332,14 +336,18 @@ TEST(FilterConfig, ZeroIsValidWhereItMeansNoneButNegativeIsNot) {
   }
 }
 
-TEST(FilterConfig, WheelCorrelationOfKappaIsBelowOne) {
-  json edited = DefaultJson();
-  edited["slip_aware_odometry"]["slip_compliance_wheel_correlation"] = 0.999;
-  EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").slip_aware_odometry.slip_compliance_wheel_correlation, 0.999);
-  for (const double bad : {1.0, 1.5, -0.5}) {
-    edited["slip_aware_odometry"]["slip_compliance_wheel_correlation"] = bad;
-    EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.slip_compliance_wheel_correlation must be in [0, 1)"))
-        << bad;
+TEST(FilterConfig, WheelCorrelationsAreBelowOne) {
+  for (const std::string key : {"slip_compliance_wheel_correlation", "rolling_radius_noise_wheel_correlation"}) {
+    json edited = DefaultJson();
+    edited["slip_aware_odometry"][key] = 0.999;
+    const SlipAwareOdometryConfig parsed = ParseFilterConfig(edited.dump(), "edited.json").slip_aware_odometry;
+    EXPECT_EQ(key == "slip_compliance_wheel_correlation" ? parsed.slip_compliance_wheel_correlation
+                                                         : parsed.rolling_radius_noise_wheel_correlation,
+              0.999);
+    for (const double bad : {1.0, 1.5, -0.5}) {
+      edited["slip_aware_odometry"][key] = bad;
+      EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry." + key + " must be in [0, 1)")) << key << " " << bad;
+    }
   }
 }
 

@@ -325,38 +325,83 @@ TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
   }
 }
 
-// The wheels' kappas share rho of their random walk: Q(kappa_i, kappa_j) = rho q^2 sqrt(d_i d_j),
-// and Q stays positive semi-definite; rho = 0 leaves them independent.
-TEST(PredictStep, CorrelatedSlipComplianceNoise) {
+// The block of Q over one state per wheel (R_w or kappa), wheels in vehicle order.
+Eigen::MatrixXd WheelBlock(const Eigen::MatrixXd& q, const std::vector<int>& states) {
+  const auto n = static_cast<Eigen::Index>(states.size());
+  Eigen::MatrixXd block(n, n);
+  for (Eigen::Index a = 0; a < n; ++a) {
+    for (Eigen::Index b = 0; b < n; ++b) block(a, b) = q(states[a], states[b]);
+  }
+  return block;
+}
+
+// A random walk per metre rolled shared rho between wheels: Q_ij = rho q^2 sqrt(d_i d_j) (q^2 d_i on
+// the diagonal), symmetric and positive semi-definite; rho = 0 leaves the wheels independent.
+void ExpectCorrelatedWalk(const Eigen::MatrixXd& block, double q, double rho) {
+  const double q2 = q * q;
+  for (Eigen::Index a = 0; a < block.rows(); ++a) {
+    const double da = block(a, a) / q2;  // the distance wheel a rolled
+    EXPECT_GT(da, 0.0);
+    for (Eigen::Index b = 0; b < block.rows(); ++b) {
+      if (a == b) continue;
+      const double db = block(b, b) / q2;
+      EXPECT_NEAR(block(a, b), rho * q2 * std::sqrt(da * db), 1e-12 * q2 * std::sqrt(da * db)) << rho;
+      EXPECT_EQ(block(a, b), block(b, a));
+    }
+  }
+  EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(block).eigenvalues().minCoeff(), -1e-12 * block.norm());
+}
+
+// slip_compliance_wheel_correlation and rolling_radius_noise_wheel_correlation: each correlates
+// its own state's walk across the wheels and nothing else (R_w and kappa stay uncorrelated).
+TEST(PredictStep, CorrelatedWheelRandomWalks) {
   const mapio::VehicleConfig vehicle = mapio::AgrimaroSwerveConfig();
   const StateLayout layout = StateLayout::For(vehicle, true);
-  for (const double rho : {0.0, 0.5, 0.9999}) {
-    FilterConfig config;
-    config.slip_aware_odometry.slip_compliance_wheel_correlation = rho;
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
-    x(L::kVx) = 1.2;
-    x(L::kYawRate) = 0.4;  // the wheels roll different distances
-    Eigen::MatrixXd p = Eigen::MatrixXd::Zero(layout.size, layout.size);  // the increment is Q
-    PredictStep(vehicle, layout, config, x, p, 0.05);
-    const double q2 = config.slip_aware_odometry.slip_compliance_noise_per_sqrt_m *
-                      config.slip_aware_odometry.slip_compliance_noise_per_sqrt_m;
-    const std::size_t n = vehicle.wheels.size();
-    Eigen::MatrixXd kappa(n, n);
-    for (std::size_t a = 0; a < n; ++a) {
-      for (std::size_t b = 0; b < n; ++b) kappa(a, b) = p(layout.slip_compliance[a], layout.slip_compliance[b]);
-    }
-    for (std::size_t a = 0; a < n; ++a) {
-      const double da = kappa(a, a) / q2;  // the distance wheel a rolled
-      EXPECT_GT(da, 0.0);
-      for (std::size_t b = 0; b < n; ++b) {
-        if (a == b) continue;
-        const double db = kappa(b, b) / q2;
-        EXPECT_NEAR(kappa(a, b), rho * q2 * std::sqrt(da * db), 1e-15) << rho;
-        EXPECT_EQ(kappa(a, b), kappa(b, a));
+  for (const double rho_kappa : {0.0, 0.5, 0.9999}) {
+    for (const double rho_radius : {0.0, 0.9, 0.99}) {
+      FilterConfig config;
+      SlipAwareOdometryConfig& s = config.slip_aware_odometry;
+      s.slip_compliance_wheel_correlation = rho_kappa;
+      s.rolling_radius_noise_wheel_correlation = rho_radius;
+      Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+      x(L::kVx) = 1.2;
+      x(L::kYawRate) = 0.4;  // the wheels roll different distances
+      Eigen::MatrixXd p = Eigen::MatrixXd::Zero(layout.size, layout.size);  // the increment is Q
+      PredictStep(vehicle, layout, config, x, p, 0.05);
+      ExpectCorrelatedWalk(WheelBlock(p, layout.slip_compliance), s.slip_compliance_noise_per_sqrt_m, rho_kappa);
+      ExpectCorrelatedWalk(WheelBlock(p, layout.rolling_radius), s.rolling_radius_noise_m_per_sqrt_m, rho_radius);
+      for (std::size_t a = 0; a < vehicle.wheels.size(); ++a) {
+        for (std::size_t b = 0; b < vehicle.wheels.size(); ++b) {
+          EXPECT_EQ(p(layout.rolling_radius[a], layout.slip_compliance[b]), 0.0);
+        }
       }
     }
-    EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(kappa).eigenvalues().minCoeff(), -1e-18);
-    EXPECT_EQ(p(layout.rolling_radius[0], layout.rolling_radius[1]), 0.0);  // the radii stay independent
+  }
+}
+
+// What the radius correlation is for: driving straight (equal distances d), the difference of two
+// wheels' radii, which turns the vehicle, walks with 2 (1 - rho) q^2 d, and their mean with
+// (1 + rho) q^2 d / 2.
+TEST(PredictStep, CorrelatedRadiusWalkShrinksTheRadiusDifference) {
+  const mapio::VehicleConfig vehicle = mapio::DifferentialDriveConfig();
+  const StateLayout layout = StateLayout::For(vehicle, true);
+  for (const double rho : {0.0, 0.99}) {
+    FilterConfig config;
+    config.slip_aware_odometry.rolling_radius_noise_wheel_correlation = rho;
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(L::kVx) = 0.5;
+    Eigen::MatrixXd p = Eigen::MatrixXd::Zero(layout.size, layout.size);
+    const double dt = 0.02;
+    PredictStep(vehicle, layout, config, x, p, dt);
+    const double q2d = config.slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m *
+                       config.slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m * 0.5 * dt;
+    Eigen::VectorXd difference = Eigen::VectorXd::Zero(layout.size);
+    difference(layout.rolling_radius[0]) = 1.0;
+    difference(layout.rolling_radius[1]) = -1.0;
+    Eigen::VectorXd mean = Eigen::VectorXd::Zero(layout.size);
+    mean(layout.rolling_radius[0]) = mean(layout.rolling_radius[1]) = 0.5;
+    EXPECT_NEAR(difference.dot(p * difference), 2.0 * (1.0 - rho) * q2d, 1e-9 * q2d) << rho;
+    EXPECT_NEAR(mean.dot(p * mean), 0.5 * (1.0 + rho) * q2d, 1e-9 * q2d) << rho;
   }
 }
 

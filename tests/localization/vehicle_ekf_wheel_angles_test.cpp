@@ -24,15 +24,20 @@ void ExpectConvergedWithAngles(const VehicleConfig& v, bool slip_aware) {
   AddWheelAngles(d);
   VehicleEkf ekf(v, AngleConfig(slip_aware), kOrigin, WheelNames(v));
   ASSERT_TRUE(ekf.layout().has_wheel_angles());
-  std::size_t angle_updates = 0, speed_updates = 0;
+  std::size_t angle_updates = 0, speed_updates = 0, speed_updates_after_angles = 0;
   const WorstErrors worst = ReplayDrive(ekf, d, 8.0, [&](const ProcessResult& r) {
     for (const UpdateRecord& u : r.updates) {
       angle_updates += u.sensor == "wheel_angles";
       speed_updates += u.sensor == "wheels";
+      speed_updates_after_angles += u.sensor == "wheels" && angle_updates > 0;
     }
   });
   EXPECT_GT(angle_updates, 3500u);
-  EXPECT_EQ(speed_updates, 0u);  // every message carries angles: no speed update
+  // Every message carries angles: speeds only at the start, until the wheel rates are known
+  // (wheels.angle_max_prediction_sigma_rad).
+  EXPECT_GE(speed_updates, 1u);
+  EXPECT_LE(speed_updates, 5u);
+  EXPECT_EQ(speed_updates_after_angles, 0u);
   EXPECT_LT(worst.position_m, 0.05);
   EXPECT_LT(worst.heading_rad, kPi / 180);
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance()).info(), Eigen::Success);
@@ -46,11 +51,22 @@ TEST(VehicleEkfWheelAngles, SyntheticStraightAndCircleEveryVehicle) {
   ExpectConvergedWithAngles(mapio::TrackedVehicleConfig(), false);
 }
 
-/// A filter initialised at rest by SetPose, with `vx` set, and the wheel speeds of a straight drive.
+/// A filter initialised at rest by SetPose, and the wheel speeds of a straight drive. Its wheel
+/// rates are unknown (velocity sigma 0.3 m/s), so with the default angle_max_prediction_sigma_rad
+/// the first messages would be used as speeds; the tests of anchoring and gating lift that limit
+/// (max_prediction_sigma_rad), and UntilTheRatesAreKnownTheSpeedsAreUsed tests it.
 struct Rolling {
+  explicit Rolling(double max_prediction_sigma_rad = 1.0)
+      : ekf(v, Config(max_prediction_sigma_rad), kOrigin, WheelNames(v)) {
+    ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  }
+  static FilterConfig Config(double max_prediction_sigma_rad) {
+    FilterConfig config = AngleConfig(false);
+    config.wheels.angle_max_prediction_sigma_rad = max_prediction_sigma_rad;
+    return config;
+  }
   VehicleConfig v = mapio::DifferentialDriveConfig();
-  VehicleEkf ekf{v, AngleConfig(false), kOrigin, WheelNames(v)};
-  Rolling() { ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4); }
+  VehicleEkf ekf;
   WheelsMessage Wheels(double t, double angle_rad) const {
     const double speed = 1.0 / v.wheels[0].nominal_radius_m;
     return {t, {speed, speed}, std::nullopt, std::vector<double>{angle_rad, angle_rad}};
@@ -77,6 +93,33 @@ TEST(VehicleEkfWheelAngles, TheFirstAnglesAnchorTheStatesAndTheNextOnesUpdate) {
   first = r.ekf.Process(r.Wheels(1.02, -7.0));
   for (const UpdateRecord& u : first.updates) EXPECT_NE(u.sensor, "wheel_angles");
   EXPECT_EQ(r.ekf.state()(layout.wheel_angle[0]), -7.0);
+}
+
+// wheels.angle_max_prediction_sigma_rad: right after initialisation a predicted angle is uncertain
+// by far more than a tick (the velocity's 0.3 m/s over 0.02 s), so the message's speeds update the
+// filter and the angles are re-anchored to it; once the speeds have pinned the rates, the angles.
+TEST(VehicleEkfWheelAngles, UntilTheRatesAreKnownTheSpeedsAreUsed) {
+  Rolling r(FilterConfig{}.wheels.angle_max_prediction_sigma_rad);
+  const StateLayout& layout = r.ekf.layout();
+  const double step = 0.02 / r.v.wheels[0].nominal_radius_m;  // rad per message at 1 m/s
+  r.ekf.Process(r.Wheels(0.02, 0.0));                          // anchors
+  const ProcessResult second = r.ekf.Process(r.Wheels(0.04, step));
+  ASSERT_FALSE(second.updates.empty());
+  EXPECT_EQ(second.updates.front().sensor, "wheels");
+  const double variance = r.ekf.config().wheels.angle_sigma_rad * r.ekf.config().wheels.angle_sigma_rad;
+  for (const int k : layout.wheel_angle) {
+    EXPECT_EQ(r.ekf.state()(k), step);  // re-anchored to this message
+    EXPECT_DOUBLE_EQ(r.ekf.covariance()(k, k), variance);
+    EXPECT_EQ(r.ekf.covariance().row(k).cwiseAbs().sum(), r.ekf.covariance()(k, k));
+  }
+  const ProcessResult third = r.ekf.Process(r.Wheels(0.06, 2.0 * step));
+  ASSERT_FALSE(third.updates.empty());
+  EXPECT_EQ(third.updates.front().sensor, "wheel_angles");
+  EXPECT_TRUE(third.updates.front().outcome.accepted);
+  // Without the limit the second message already updates with its angles.
+  Rolling unlimited;
+  unlimited.ekf.Process(unlimited.Wheels(0.02, 0.0));
+  EXPECT_EQ(unlimited.ekf.Process(unlimited.Wheels(0.04, step)).updates.front().sensor, "wheel_angles");
 }
 
 TEST(VehicleEkfWheelAngles, AMessageWithoutAnglesIsUsedAsSpeeds) {

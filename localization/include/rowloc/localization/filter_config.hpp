@@ -58,6 +58,11 @@ struct SlipAwareOdometryConfig {
   /// their random walk (wheels of one vehicle roll on one terrain): the difference of two wheels'
   /// kappas has (1 - rho) times the variance of independent ones (docs/localization-filter.md §5.4).
   double slip_compliance_wheel_correlation = 0.0;
+  /// Correlation rho in [0, 1) of the random walks of two wheels' R_w (their initial sigmas stay
+  /// independent). What changes a radius during a drive (tyre temperature and pressure, load, the
+  /// terrain's sinkage) changes every wheel's alike; only the difference of two radii turns the
+  /// vehicle, and it has (1 - rho) times the walk of independent ones (docs/localization-filter.md §5.6).
+  double rolling_radius_noise_wheel_correlation = 0.0;
   /// Wheels messages without torques: the traction coefficient from the acceleration state
   /// (measurement_models.hpp) instead of 0.
   bool traction_from_acceleration = true;
@@ -131,6 +136,12 @@ struct WheelNoise {
   double angle_sigma_rad = 1.77e-3;
   /// White noise on theta' = omega(x): the wheel-rate model's error, rad/s/sqrt(Hz).
   double angle_rate_noise_radps_per_sqrt_hz = 1e-3;
+  /// The angles update the filter only when every wheel's predicted angle sigma is at most this,
+  /// rad (default: one tick at 1024 ticks per revolution). Otherwise (after initialisation, until
+  /// the wheel rates are known to about a tick per sample) the message's speeds are used and the
+  /// angles re-anchored: precise angles linearized far from the truth can drive the filter away
+  /// (docs/localization-filter.md §5.7).
+  double angle_max_prediction_sigma_rad = 6.14e-3;
 };
 
 struct SteeringNoise {

@@ -171,8 +171,9 @@ class VehicleEkf {
   ProcessResult Apply(const WheelsMessage& wheels);
   /// The wheel-angle update of a wheels message with angles (wheel_angle_model.hpp); anchors the
   /// angle states to the message instead when they are not anchored yet or the update is gated out.
-  /// Returns false, and does nothing, when no wheel ticked since the last message (the vehicle is
-  /// at rest: the caller uses the speeds).
+  /// Returns false, and the caller uses the speeds, when no wheel ticked since the last message
+  /// (the vehicle is at rest; nothing else done) or when a predicted angle's sigma exceeds
+  /// wheels.angle_max_prediction_sigma_rad (the angles re-anchored).
   bool ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result);
   /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
   /// beyond the gate re-anchors them to the torques instead.
@@ -180,6 +181,9 @@ class VehicleEkf {
   /// State `index` set to `value` with `variance`, uncorrelated with the others (wheel angles and
   /// traction states anchored to their measurement).
   void Reanchor(int index, double value, double variance);
+  /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
+  /// variance, uncorrelated with the other states.
+  void AnchorWheelAngles(const Eigen::VectorXd& z);
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
