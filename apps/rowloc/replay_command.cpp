@@ -14,7 +14,8 @@
 // state and the raw encoder speeds of that time; skid-steer track slip is the observer's, unsmoothed.
 // --calibration ESTIMATES: the R_w and kappa priors of every wheel from a previous drive (the last
 // `wheel_calibration` of that estimate stream, e.g. its --smoothed output) instead of the filter
-// file's nominal ones (VehicleEkf::SetWheelCalibrationPrior).
+// file's nominal ones (VehicleEkf::SetWheelCalibrationPrior), their sigmas widened by the filter
+// file's change between drives (slip_aware_odometry.carried_*_change_sigma*).
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -357,7 +358,8 @@ void RegisterReplayCommand(CLI::App& app) {
                   "With --map: one NDJSON line per echo, the position ellipse before and after it");
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
   cmd->add_option("--calibration", o->calibration_path,
-                  "Estimate stream of a previous drive: its last wheel_calibration as the R_w and kappa priors");
+                  "Estimate stream of a previous drive: its last wheel_calibration as the R_w and kappa priors "
+                  "(sigmas widened by the filter file's carried_*_change_sigma*)");
   cmd->add_option("--smoothed", o->smoothed_path,
                   "Also write the fixed-interval (RTS) smoothed estimates, same times and format (post-run)");
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);

@@ -48,6 +48,10 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation,
        Domain::kFraction},
       {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
+      {"slip_aware_odometry.carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m,
+       Domain::kNonNegative},
+      {"slip_aware_odometry.carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma,
+       Domain::kNonNegative},
       {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
       {"initialisation.heading_baseline_m", i.heading_baseline_m},
       {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
@@ -116,7 +120,9 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
                              s.Number("rolling_radius_noise_wheel_correlation"),
                              s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
-                             s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius")};
+                             s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius"),
+                             s.Number("carried_rolling_radius_change_sigma_m"),
+                             s.Number("carried_slip_compliance_change_sigma")};
     s.RejectUnknownKeys();
   }
   {

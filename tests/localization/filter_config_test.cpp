@@ -50,6 +50,8 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_wheel_correlation, sb.slip_compliance_wheel_correlation);
   EXPECT_EQ(sa.rolling_radius_noise_wheel_correlation, sb.rolling_radius_noise_wheel_correlation);
+  EXPECT_EQ(sa.carried_rolling_radius_change_sigma_m, sb.carried_rolling_radius_change_sigma_m);
+  EXPECT_EQ(sa.carried_slip_compliance_change_sigma, sb.carried_slip_compliance_change_sigma);
   EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
   EXPECT_EQ(sa.traction_noise_per_sqrt_s, sb.traction_noise_per_sqrt_s);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
@@ -196,7 +198,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 62u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 64u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -286,13 +288,15 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
 }
 
 /// Numeric keys for which 0 is valid: no encoder filter, calibration states that do not drift,
-/// independent wheels' kappas and radius walks.
+/// independent wheels' kappas and radius walks, a carried calibration taken as it is.
 const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
                                           "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_wheel_correlation",
                                           "slip_aware_odometry.rolling_radius_noise_wheel_correlation",
-                                          "slip_aware_odometry.torque_sigma_nm"};
+                                          "slip_aware_odometry.torque_sigma_nm",
+                                          "slip_aware_odometry.carried_rolling_radius_change_sigma_m",
+                                          "slip_aware_odometry.carried_slip_compliance_change_sigma"};
 
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();

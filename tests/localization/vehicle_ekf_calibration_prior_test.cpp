@@ -20,6 +20,8 @@ TEST(VehicleEkfCalibrationPrior, ReplacesTheFilterFilesPriorAtInitialisation) {
   FilterConfig config;
   config.slip_aware_odometry.enabled = true;
   config.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9;
+  config.slip_aware_odometry.carried_rolling_radius_change_sigma_m = 0.0;  // the carried sigmas as they are
+  config.slip_aware_odometry.carried_slip_compliance_change_sigma = 0.0;
   VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
   std::vector<WheelCalibrationPrior> prior = PriorFor(v);
   std::reverse(prior.begin(), prior.end());  // any order: matched by name
@@ -46,6 +48,39 @@ TEST(VehicleEkfCalibrationPrior, ReplacesTheFilterFilesPriorAtInitialisation) {
   VehicleEkf plain(v, config, kOrigin, WheelNames(v));
   plain.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
   EXPECT_EQ(plain.state()(l.rolling_radius[0]), v.wheels[0].nominal_radius_m);
+}
+
+// slip_aware_odometry.carried_*_change_sigma*: what may have changed since the previous drive
+// widens the carried sigmas in quadrature; the kappas keep the file's correlation at the wider sigma.
+TEST(VehicleEkfCalibrationPrior, TheChangeBetweenDrivesWidensTheCarriedSigmas) {
+  const VehicleConfig v = mapio::AgrimaroSwerveConfig();
+  FilterConfig config;
+  config.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9;
+  config.slip_aware_odometry.carried_rolling_radius_change_sigma_m = 1.2e-3;
+  config.slip_aware_odometry.carried_slip_compliance_change_sigma = 0.3;
+  VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
+  ekf.SetWheelCalibrationPrior(PriorFor(v));
+  ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  const StateLayout& l = ekf.layout();
+  const std::vector<WheelCalibrationPrior> prior = PriorFor(v);
+  const double radius_variance = 5e-4 * 5e-4 + 1.2e-3 * 1.2e-3;
+  const double kappa_variance = 0.1 * 0.1 + 0.3 * 0.3;
+  for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+    EXPECT_EQ(ekf.state()(l.rolling_radius[i]), prior[i].rolling_radius_m);  // the values are kept
+    EXPECT_EQ(ekf.state()(l.slip_compliance[i]), prior[i].slip_compliance);
+    EXPECT_NEAR(ekf.covariance()(l.rolling_radius[i], l.rolling_radius[i]), radius_variance, 1e-18);
+    EXPECT_NEAR(ekf.covariance()(l.slip_compliance[i], l.slip_compliance[i]), kappa_variance, 1e-15);
+    for (std::size_t j = 0; j < v.wheels.size(); ++j) {
+      if (i != j) {
+        EXPECT_NEAR(ekf.covariance()(l.slip_compliance[i], l.slip_compliance[j]), 0.9 * kappa_variance, 1e-15);
+      }
+    }
+  }
+  // Without a carried calibration the change is not used: the file's own prior.
+  VehicleEkf plain(v, config, kOrigin, WheelNames(v));
+  plain.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
+  const double file_sigma = config.slip_aware_odometry.rolling_radius_sigma_m;
+  EXPECT_DOUBLE_EQ(plain.covariance()(l.rolling_radius[0], l.rolling_radius[0]), file_sigma * file_sigma);
 }
 
 TEST(VehicleEkfCalibrationPrior, BadPriorsAreRefused) {

@@ -76,6 +76,14 @@ struct SlipAwareOdometryConfig {
   /// radius. Worth it only where R_w is consistent (the traction states separate it from kappa,
   /// docs/localization-filter.md §5.5), and above all on the smoothed stream (§6).
   bool slip_with_rolling_radius = false;
+  /// How much R_w (m) and kappa may change between two drives (tyre pressure, temperature and
+  /// wear; another terrain): added in quadrature to the sigmas of a calibration carried from a
+  /// previous drive (VehicleEkf::SetWheelCalibrationPrior), whose posterior says nothing about
+  /// what changed since. Unused without a carried calibration (docs/localization-filter.md §6.2:
+  /// sized so that a change of terrain, R_w up to 3 % and kappa 0.25 to 1.25 between the simulated
+  /// ones, lies within 2.5 sigma).
+  double carried_rolling_radius_change_sigma_m = 2e-3;
+  double carried_slip_compliance_change_sigma = 0.5;
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

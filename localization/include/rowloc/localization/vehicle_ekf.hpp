@@ -127,7 +127,8 @@ class VehicleEkf {
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
   /// The R_w and kappa priors of every wheel, from a previous drive, used at every (re-)initialisation
-  /// from now on (the kappas keep the filter file's correlation, with these sigmas); an initialised
+  /// from now on, their sigmas widened by the filter file's change between drives
+  /// (slip_aware_odometry.carried_*_change_sigma*; the kappas keep its correlation); an initialised
   /// filter keeps its states. One entry per wheel of the vehicle, by name, in any order. Throws
   /// std::invalid_argument without slip-aware states, for a missing, unknown or repeated wheel, or
   /// a value outside its domain (non-finite, R_w or a sigma <= 0, kappa < 0).
@@ -184,6 +185,9 @@ class VehicleEkf {
   /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
   /// variance, uncorrelated with the other states.
   void AnchorWheelAngles(const Eigen::VectorXd& z);
+  /// A carried prior's sigmas with the filter file's change between drives added in quadrature.
+  double CarriedRadiusSigma(const WheelCalibrationPrior& prior) const;
+  double CarriedKappaSigma(const WheelCalibrationPrior& prior) const;
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
