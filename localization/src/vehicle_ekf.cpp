@@ -280,8 +280,6 @@ bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& re
         return false;
       }
     }
-  }
-  if (wheel_angles_anchored_) {
     WheelAngleModel(x_, layout_, b.wheels);
     const double s = config_.wheels.angle_sigma_rad;
     b.noise.setZero(z.size(), z.size());

@@ -142,14 +142,6 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
   return notice.str();
 }
 
-double VehicleEkf::CarriedRadiusSigma(const WheelCalibrationPrior& prior) const {
-  return std::hypot(prior.rolling_radius_sigma_m, config_.slip_aware_odometry.carried_rolling_radius_change_sigma_m);
-}
-
-double VehicleEkf::CarriedKappaSigma(const WheelCalibrationPrior& prior) const {
-  return std::hypot(prior.slip_compliance_sigma, config_.slip_aware_odometry.carried_slip_compliance_change_sigma);
-}
-
 void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance) {
   const InitialisationConfig& init = config_.initialisation;
   x_.setZero();
@@ -167,8 +159,8 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
     }
     if (const int r = layout_.rolling_radius[i]; r >= 0) {
       const WheelCalibrationPrior* prior = calibration_prior_.empty() ? nullptr : &calibration_prior_[i];
-      const double radius_sigma = prior ? CarriedRadiusSigma(*prior) : slip.rolling_radius_sigma_m;
-      const double kappa_sigma = prior ? CarriedKappaSigma(*prior) : slip.slip_compliance_sigma;
+      const double radius_sigma = prior ? prior->rolling_radius_sigma_m : slip.rolling_radius_sigma_m;
+      const double kappa_sigma = prior ? prior->slip_compliance_sigma : slip.slip_compliance_sigma;
       x_(r) = prior ? prior->rolling_radius_m : vehicle_.wheels[i].nominal_radius_m;
       variance(r) = radius_sigma * radius_sigma;
       x_(layout_.slip_compliance[i]) = prior ? prior->slip_compliance : slip.slip_compliance_initial;
@@ -189,7 +181,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   p_.diagonal() = variance;
   if (layout_.slip_aware()) {  // correlated kappas (one terrain): rho sigma_a sigma_b
     const auto sigma = [&](std::size_t i) {
-      return calibration_prior_.empty() ? slip.slip_compliance_sigma : CarriedKappaSigma(calibration_prior_[i]);
+      return calibration_prior_.empty() ? slip.slip_compliance_sigma : calibration_prior_[i].slip_compliance_sigma;
     };
     for (std::size_t a = 0; a < layout_.wheel_count(); ++a) {
       for (std::size_t b = 0; b < layout_.wheel_count(); ++b) {
@@ -258,7 +250,14 @@ void VehicleEkf::SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrio
     if (!ordered[i]) {
       throw std::invalid_argument("wheel calibration prior: no entry for '" + vehicle_.wheels[i].name + "'");
     }
-    prior.push_back(*ordered[i]);
+    // What may have changed since that drive widens its sigmas (the filter file's change between
+    // drives, in quadrature); calibration_prior_ holds the widened prior.
+    WheelCalibrationPrior carried = *ordered[i];
+    const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
+    carried.rolling_radius_sigma_m =
+        std::hypot(carried.rolling_radius_sigma_m, slip.carried_rolling_radius_change_sigma_m);
+    carried.slip_compliance_sigma = std::hypot(carried.slip_compliance_sigma, slip.carried_slip_compliance_change_sigma);
+    prior.push_back(carried);
   }
   calibration_prior_ = std::move(prior);
 }

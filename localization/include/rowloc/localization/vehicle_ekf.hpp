@@ -185,9 +185,6 @@ class VehicleEkf {
   /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
   /// variance, uncorrelated with the other states.
   void AnchorWheelAngles(const Eigen::VectorXd& z);
-  /// A carried prior's sigmas with the filter file's change between drives added in quadrature.
-  double CarriedRadiusSigma(const WheelCalibrationPrior& prior) const;
-  double CarriedKappaSigma(const WheelCalibrationPrior& prior) const;
   ProcessResult Apply(const SteeringMessage& steering);
   ProcessResult Apply(const VioMessage& vio);
   ProcessResult Apply(const UltrasonicMessage& ping);
@@ -252,7 +249,7 @@ class VehicleEkf {
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
   std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
-  std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, or empty: the filter file's
+  std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
 
 }  // namespace rowloc::localization
