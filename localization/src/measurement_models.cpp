@@ -1,5 +1,7 @@
 #include "rowloc/localization/measurement_models.hpp"
 
+#include "rowloc/localization/wheel_slip_estimate.hpp"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -85,9 +87,24 @@ double WheelRollingRadius(const Eigen::VectorXd& x, const mapio::VehicleConfig& 
   return layout.rolling_radius[i] >= 0 ? x(layout.rolling_radius[i]) : vehicle.wheels[i].nominal_radius_m;
 }
 
+TurningTraction TurningResistanceTraction(const mapio::VehicleConfig& vehicle, std::size_t i, double yaw_rate_radps) {
+  if (vehicle.kind != mapio::VehicleKind::kSkidSteer || !vehicle.tracks || vehicle.wheels.size() != 2) return {};
+  const double gauge_m = std::abs(vehicle.wheels[0].position_m.y() - vehicle.wheels[1].position_m.y());
+  const double scale = -std::copysign(1.0, vehicle.wheels[i].position_m.y()) *
+                       vehicle.tracks->turning_resistance_coefficient * vehicle.tracks->contact_length_m / (2.0 * gauge_m);
+  const double full_radps = 2.0 * kSlipDeadbandMps / gauge_m;          // r_0
+  const double start_radps = kTurningTractionDeadZone * full_radps;    // r_0 / 2
+  const double turn_radps = std::abs(yaw_rate_radps);
+  if (turn_radps <= start_radps) return {};
+  const double sign = std::copysign(1.0, yaw_rate_radps);
+  if (turn_radps >= full_radps) return {scale * sign, 0.0};
+  const double ramp = 1.0 / (full_radps - start_radps);
+  return {scale * sign * (turn_radps - start_radps) * ramp, scale * ramp};
+}
+
 namespace {
 /// The traction coefficient of wheel i (WheelTractionCoefficient's rule): the traction state when
-/// the torques measure one, else the torque over N r, else the acceleration's (centre() gives the
+/// the torques measure one, else the torque over N r, else the motion's (centre() gives the
 /// wheel's direction: called only then), else 0.
 template <typename Centre>
 double Traction(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout, std::size_t i,
@@ -95,7 +112,7 @@ double Traction(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, c
   if (torque_nm && layout.traction[i] >= 0) return x(layout.traction[i]);
   if (torque_nm) return (*torque_nm)[i] / WheelTractionScaleNm(vehicle, i);
   if (!from_acceleration) return 0.0;
-  return TractionFromAcceleration(x, centre());
+  return TractionFromAcceleration(x, centre()) + TurningResistanceTraction(vehicle, i, x(L::kYawRate)).value;
 }
 }  // namespace
 
@@ -151,10 +168,11 @@ void WheelSpeedModel(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
     if (layout.steering[i] >= 0) {  // d v / d delta
       m.jacobian(row, layout.steering[i]) = dv * (w.lateral() - tau * (-s * ax + c * ay));
     }
-    if (dh_dmu != 0.0) {  // mu = (c a_x + s a_y) / g
+    if (dh_dmu != 0.0) {  // mu = (c a_x + s a_y) / g + tau_i(r)
       const double g = kStandardGravityMps2;
       m.jacobian(row, L::kAx) += dh_dmu * c / g;
       m.jacobian(row, L::kAy) += dh_dmu * s / g;
+      m.jacobian(row, L::kYawRate) += dh_dmu * TurningResistanceTraction(vehicle, i, r).d_yaw_rate;
       if (layout.steering[i] >= 0) m.jacobian(row, layout.steering[i]) += dh_dmu * (-s * x(L::kAx) + c * x(L::kAy)) / g;
     }
   }

@@ -2,6 +2,7 @@
 
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/process_model.hpp"
+#include "rowloc/localization/state_bound.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/localization/wheel_slip_estimate.hpp"
 
@@ -362,11 +363,30 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
   // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
   // model linearizes 1 / (1 - kappa mu): checked there, not after every message.
   const bool from_acceleration = before_wheel_model && slip.traction_from_acceleration;
+  std::vector<double>& max_kappa = update_buffers_.max_slip_compliance;
+  max_kappa.resize(layout_.wheel_count());
+  bool projected = false;
+  const auto project = [&](int index, double bound) {
+    ProjectOntoBound(x_, p_, index, bound);
+    projected = true;
+  };
+  for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
+    const double nominal = vehicle_.wheels[i].nominal_radius_m;
+    const int radius = layout_.rolling_radius[i], kappa = layout_.slip_compliance[i];
+    if (x_(radius) < 0.5 * nominal) project(radius, 0.5 * nominal);
+    if (x_(radius) > 1.5 * nominal) project(radius, 1.5 * nominal);
+    if (x_(kappa) < 0.0) project(kappa, 0.0);
+    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
+    max_kappa[i] = mu > 0.0 ? slip.max_model_slip / mu : std::numeric_limits<double>::infinity();
+    if (x_(kappa) > max_kappa[i]) project(kappa, max_kappa[i]);
+  }
+  if (!projected) return;
+  // A later wheel's projection moves the earlier wheels' correlated states, by little: the limits
+  // themselves are then kept exactly.
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     ClampWheelCalibration(x_, i);
-    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
     double& kappa = x_(layout_.slip_compliance[i]);
-    if (mu > 0.0) kappa = std::min(kappa, slip.max_model_slip / mu);
+    kappa = std::min(kappa, max_kappa[i]);
   }
 }
 

@@ -23,3 +23,22 @@ rowloc_script_test(seed_sweep_rejects_missing_scenario OFF "no such file: config
 # A run that fails names its command and shows rowloc's error.
 rowloc_script_test(seed_sweep_reports_a_failed_run OFF "seed-sweep: .*rowloc replay .*failed \\(2\\):.*bad-gate\\.json: .*gate_probability"
   seed-sweep config/scenarios/agrimaro-tiles.json ${_swerve} --filter tests/data/filters/bad-gate.json --seeds 1)
+
+# tune-noise: the bisection finds the wheel sigma at which the differential's wheel NIS per dof is
+# 1 on one training seed (loose tolerance: a few replays), and checks it on another.
+set(_diff config/scenarios/slip-odometry-loops.json --vehicle config/vehicles/differential.json
+    --filter config/filters/default.json)
+rowloc_script_test(tune_noise_identifies_the_wheel_sigma ON
+  "identified: wheels\\.speed_sigma_radps = 0\\.06[0-9]* \\(file: 0\\.1; factor 0\\.6[0-9]*\\).*slip-odometry-loops\\.json \\| 2 \\| 0\\.9[0-9]+ -> [12]\\.[0-9]+ .*identified: NIS per dof (0\\.9[5-9]|1\\.0[0-5])"
+  tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2 --low 0.5 --high 0.8
+  --tolerance 0.05)
+rowloc_script_test(tune_noise_rejects_an_interval_that_does_not_bracket OFF
+  "factor \\[1, 2\\] of wheels\\.speed_sigma_radps does not bracket NIS per dof 1: 0\\.4[0-9]+ at 1"
+  tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2 --low 1 --high 2)
+rowloc_script_test(tune_noise_rejects_an_absent_key OFF "default\\.json: wheels\\.speed_sigma is not a number > 0"
+  tune-noise ${_diff} --key wheels.speed_sigma --sensor wheels --train 1 --test 2)
+rowloc_script_test(tune_noise_rejects_overlapping_seeds OFF "--train and --test seeds overlap"
+  tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1-3 --test 3-4)
+rowloc_script_test(tune_noise_names_a_sensor_without_updates OFF
+  "seed 1: no 'ultrasonic' updates \\(the run has: gnss, imu, nonholonomic, wheels\\)"
+  tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor ultrasonic --train 1 --test 2)

@@ -179,6 +179,16 @@ TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheWalksTheTorqueNoiseA
   EXPECT_FALSE(FilterConfig{}.wheels.angle_measurement);  // the default uses the speeds
 }
 
+TEST(FilterConfig, DifferentialFileDiffersInTheWheelSpeedSigma) {
+  // The differential drive's encoder noise identified from its wheel NIS (scripts/tune-noise,
+  // docs/localization-filter.md §5.8): 0.1 rad/s made the NIS half its expected value.
+  FilterConfig expected;
+  expected.name = "differential";
+  expected.wheels.speed_sigma_radps = 0.06345;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("differential")), expected);
+  EXPECT_EQ(FilterConfig{}.wheels.speed_sigma_radps, 0.1);  // the default, for every vehicle
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;

@@ -370,9 +370,21 @@ TEST(WheelSpeedModel, SlipAwareOdometerFollowsSeed004) {
   }
 }
 
-// Without torques, traction_from_acceleration takes mu = (cos(delta) a_x + sin(delta) a_y) / g:
-// braking (mu < 0) lowers the predicted encoder speed, speeding up raises it; torques, when given,
-// win, and a filter without slip states ignores the switch.
+// The turning term of a skid steer, written out here apart from the implementation:
+// -sign(l_y) mu_t l / (2 B) times the turn's direction, 0 below r_0 / 2, full from r_0 = 2 v_0 / B.
+double ExpectedTurningTraction(const mapio::VehicleConfig& v, std::size_t i, double r) {
+  if (v.kind != mapio::VehicleKind::kSkidSteer) return 0.0;
+  const double gauge = std::abs(v.wheels[0].position_m.y() - v.wheels[1].position_m.y());
+  const double full = 2.0 * 0.05 / gauge, start = 0.5 * full;
+  const double turn = std::copysign(std::clamp((std::abs(r) - start) / (full - start), 0.0, 1.0), r);
+  return -std::copysign(1.0, v.wheels[i].position_m.y()) * v.tracks->turning_resistance_coefficient *
+         v.tracks->contact_length_m / (2.0 * gauge) * turn;
+}
+
+// Without torques, traction_from_acceleration takes mu = (cos(delta) a_x + sin(delta) a_y) / g
+// (plus a skid steer's turning term): braking (mu < 0) lowers the predicted encoder speed,
+// speeding up raises it; torques, when given, win, and a filter without slip states ignores the
+// switch.
 TEST(WheelSpeedModel, TractionFromTheAccelerationWithoutTorque) {
   std::mt19937 rng(77);
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
@@ -387,7 +399,8 @@ TEST(WheelSpeedModel, TractionFromTheAccelerationWithoutTorque) {
       for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
         const auto row = static_cast<Eigen::Index>(i);
         const double delta = layout.steering[i] >= 0 ? x(layout.steering[i]) : 0.0;
-        const double mu = (std::cos(delta) * x(L::kAx) + std::sin(delta) * x(L::kAy)) / 9.80665;
+        const double mu = (std::cos(delta) * x(L::kAx) + std::sin(delta) * x(L::kAy)) / 9.80665 +
+                          ExpectedTurningTraction(vehicle, i, x(L::kYawRate));
         EXPECT_NEAR(WheelTractionCoefficient(x, vehicle, layout, i, std::nullopt, true), mu, 1e-15);
         EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, std::nullopt, false), 0.0);
         EXPECT_EQ(WheelTractionCoefficient(x, vehicle, layout, i, torques, true), 5.0 / WheelTractionScaleNm(vehicle, i));
@@ -409,6 +422,53 @@ TEST(WheelSpeedModel, TractionFromTheAccelerationWithoutTorque) {
     EXPECT_EQ(WheelSpeedModel(x, vehicle, plain, std::nullopt, 0.0, true).predicted,
               WheelSpeedModel(x, vehicle, plain, std::nullopt, 0.0, false).predicted);
   }
+}
+
+// Wong §7.2: in a turn the outer track pushes forward and the inner one holds back, by
+// mu_t l / (2 B) of a track's load (tracked: 0.3 x 1.0 / 2.2); nothing on a straight drive (the
+// dead zone below r_0 / 2), a ramp between, and nothing for wheeled vehicles or mu_t = 0.
+TEST(TurningResistanceTraction, OuterTrackPushesInnerHoldsBackOnlyInATurn) {
+  const mapio::VehicleConfig tracked = mapio::TrackedVehicleConfig();  // left track at +y
+  const double full = 0.3 * 1.0 / 2.2, r0 = 2.0 * 0.05 / 1.1;
+  EXPECT_NEAR(TurningResistanceTraction(tracked, 1, 0.16).value, full, 1e-15);   // left turn: right is outer
+  EXPECT_NEAR(TurningResistanceTraction(tracked, 0, 0.16).value, -full, 1e-15);
+  EXPECT_NEAR(TurningResistanceTraction(tracked, 0, -0.16).value, full, 1e-15);  // right turn
+  EXPECT_EQ(TurningResistanceTraction(tracked, 0, 0.16).d_yaw_rate, 0.0);
+  for (const double r : {0.0, 0.01, -0.02, 0.49 * r0}) {
+    EXPECT_EQ(TurningResistanceTraction(tracked, 0, r).value, 0.0) << r;
+    EXPECT_EQ(TurningResistanceTraction(tracked, 0, r).d_yaw_rate, 0.0) << r;
+  }
+  // The ramp: continuous at both ends, its derivative the central difference.
+  EXPECT_NEAR(TurningResistanceTraction(tracked, 1, 0.5 * r0 + 1e-9).value, 0.0, 1e-6);
+  EXPECT_NEAR(TurningResistanceTraction(tracked, 1, r0 - 1e-9).value, full, 1e-6);
+  for (const double r : {0.6 * r0, -0.75 * r0, 0.9 * r0}) {
+    const double h = 1e-7;
+    const double numeric = (TurningResistanceTraction(tracked, 1, r + h).value -
+                            TurningResistanceTraction(tracked, 1, r - h).value) / (2.0 * h);
+    EXPECT_NEAR(TurningResistanceTraction(tracked, 1, r).d_yaw_rate, numeric, 1e-6) << r;
+    EXPECT_NEAR(TurningResistanceTraction(tracked, 1, r).value, ExpectedTurningTraction(tracked, 1, r), 1e-15);
+  }
+  mapio::VehicleConfig smooth = tracked;
+  smooth.tracks->turning_resistance_coefficient = 0.0;  // the vehicle file's off switch
+  EXPECT_EQ(TurningResistanceTraction(smooth, 1, 0.16).value, 0.0);
+  for (const mapio::VehicleConfig& wheeled :
+       {mapio::AgrimaroSwerveConfig(), mapio::VineyardUgv4wsConfig(), mapio::DifferentialDriveConfig()}) {
+    EXPECT_EQ(TurningResistanceTraction(wheeled, 0, 0.16).value, 0.0) << wheeled.name;
+  }
+  // In the odometer model: in a left turn the right (outer) track turns faster than without the
+  // term, the left one slower, for the same body motion and kappa > 0.
+  const StateLayout layout = StateLayout::For(tracked, true);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+  x(L::kVx) = 0.8;
+  x(L::kYawRate) = 0.16;
+  for (std::size_t i = 0; i < 2; ++i) {
+    x(layout.rolling_radius[i]) = 0.13;
+    x(layout.slip_compliance[i]) = 1.5;
+  }
+  const Eigen::VectorXd with = WheelSpeedModel(x, tracked, layout, std::nullopt, 0.0, true).predicted;
+  const Eigen::VectorXd without = WheelSpeedModel(x, smooth, layout, std::nullopt, 0.0, true).predicted;
+  EXPECT_GT(with(1), without(1) * 1.15);
+  EXPECT_LT(with(0), without(0) / 1.15);
 }
 
 TEST(WheelSpeedModel, RejectsAWrongTorqueCount) {

@@ -70,7 +70,7 @@ TEST(ScenarioTest, EveryShippedScenarioLoads) {
                                "vineyard-002-rough-4us", "agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel",
                                "slip-odometry-loops", "slip-odometry-turns", "tracked-straight", "tracked-circle",
                                "vineyard-002-north-4us", "vineyard-002-4us-miss30", "vineyard-002-4us-gnss-loss",
-                               "vineyard-curved-4us"}) {
+                               "vineyard-curved-4us", "tracked-circle-gnss-loss", "tracked-turns-gnss-loss"}) {
     EXPECT_TRUE(names.contains(expected)) << expected;
   }
 }

@@ -24,7 +24,8 @@
 //           A message without torques has mu_i = 0, or (traction_from_acceleration) the part the
 //           acceleration demands, mu_i = (cos(delta_i) a_x + sin(delta_i) a_y) / g: then R_i absorbs
 //           the constant rolling-resistance part and kappa_i mu_i models the slip change when the
-//           vehicle speeds up or brakes (docs/localization-filter.md §5.3))
+//           vehicle speeds up or brakes (docs/localization-filter.md §5.3); a skid steer's tracks
+//           add the turning resistance's part, TurningResistanceTraction (§5.8))
 //   with an encoder low-pass filter of time constant tau, v_i is replaced by its value tau earlier,
 //   to first order v_i - tau dv_i/dt, where dv_i/dt = cos(delta_i) (ax + r vy) + sin(delta_i)
 //   (ay - r vx) (the body-frame velocity derivatives of the motion model; yaw acceleration,
@@ -77,10 +78,35 @@ inline constexpr double kStandardGravityMps2 = 9.80665;
 /// the traction coefficient mu of the slip-aware model.
 double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t index);
 
+/// Skid steer: the traction coefficient the turning-resistance moment demands of track `index`,
+/// and its derivative by the yaw rate r (rad/s). Wong, Theory of Ground Vehicles (4th ed.) §7.2:
+/// a turn slides the tracks sideways against the moment M_r = mu_t m g l / 4 (l the contact
+/// length, mu_t the lateral resistance coefficient; mapio::TrackParameters), which the tracks
+/// resist with the longitudinal forces +-M_r / B (B the gauge): the outer track pushes forward,
+/// the inner one holds back. Over a track's static load m g / 2:
+///   tau_i = -sign(l_iy) mu_t l / (2 B) s(r),
+///   s(r)  = sign(r) clamp((|r| - d r_0) / ((1 - d) r_0), 0, 1),   r_0 = 2 v_0 / B,
+/// s the direction of the turn: full from r_0, the yaw rate at which a track's speed differs from
+/// the centre's by the slip deadband v_0 (kSlipDeadbandMps), and 0 below d r_0 (d =
+/// kTurningTractionDeadZone). The dead zone is this filter's choice, not physics: without it the
+/// yaw rate's excursions on a straight drive made tau a regressor of noise for the slip
+/// compliance, which fell from 0.6 to 0 over the cruise and mispredicted the stop
+/// (docs/localization-filter.md §5.8). 0 (and 0) for other vehicles and for a skid steer without
+/// track data; mu_t = 0 in the vehicle file turns the term off.
+inline constexpr double kTurningTractionDeadZone = 0.5;
+struct TurningTraction {
+  double value = 0.0;
+  double d_yaw_rate = 0.0;  ///< d tau_i / d r, s
+};
+TurningTraction TurningResistanceTraction(const mapio::VehicleConfig& vehicle, std::size_t index,
+                                          double yaw_rate_radps);
+
 /// Traction coefficient mu of wheel `index` in the slip-aware odometer model: with torques,
-/// T / (N r) (WheelTractionScaleNm); without, if from_acceleration, the part the body acceleration
-/// demands, (cos(delta) a_x + sin(delta) a_y) / g (the wheels carry the mass equally; the
-/// rolling-resistance part is constant on one terrain and R_w absorbs it), else 0. Throws
+/// T / (N r) (WheelTractionScaleNm); without, if from_acceleration, the part the body motion
+/// demands: the acceleration's, (cos(delta) a_x + sin(delta) a_y) / g (the wheels carry the mass
+/// equally; the rolling-resistance part is constant on one terrain and R_w absorbs it), plus for a
+/// skid steer the turning resistance's (TurningResistanceTraction; without it a tracked vehicle's
+/// speeds were gated out in every turn, docs/localization-filter.md §5.8), else 0. Throws
 /// std::invalid_argument for an index beyond the wheels or a torque count other than the wheel count.
 double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                                 std::size_t index, const std::optional<std::vector<double>>& torque_nm,

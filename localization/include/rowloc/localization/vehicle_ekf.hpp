@@ -196,8 +196,9 @@ class VehicleEkf {
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
   /// [0.5, 1.5] x nominal; the slip compliance kappa >= 0 and, for a traction coefficient mu > 0,
   /// kappa mu <= max_model_slip (so that 1 - kappa mu > 0). mu: the last wheels message's torques;
-  /// without torques, with before_wheel_model and traction_from_acceleration, the acceleration's
-  /// (WheelTractionCoefficient); else none.
+  /// without torques, with before_wheel_model and traction_from_acceleration, the motion's
+  /// (WheelTractionCoefficient); else none. A crossed limit is projected with the covariance
+  /// (state_bound.hpp: the correlated states move with it; docs/localization-filter.md §5.8).
   void ProjectStates(bool before_wheel_model = false);
   /// Wheel `wheel`'s R_w within [0.5, 1.5] x nominal and kappa >= 0 (the part of ProjectStates
   /// that needs no mu; applied to smoothed states too). The layout must be slip-aware.
@@ -243,6 +244,7 @@ class VehicleEkf {
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
     std::vector<double> steered_angles;       ///< their angles
+    std::vector<double> max_slip_compliance;  ///< ProjectStates: max_model_slip / mu per wheel
   };
   UpdateBuffers update_buffers_;
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)

@@ -1,0 +1,65 @@
+"""Simulator runs for the sweep scripts (seed-sweep, tune-noise): one seed simulated, replayed and
+evaluated with the `rowloc` command, and the seed-range argument they share.
+
+A failing command ends the script with exit status 1 and the command's own output (rowloc's error
+names the file and the field); a bad seed range is an argparse error (exit status 2).
+"""
+import argparse
+import json
+import os
+import re
+import subprocess
+import sys
+
+
+def parse_seeds(text):
+    """'N' or 'N-M' (inclusive) as a list of seeds."""
+    match = re.fullmatch(r"(\d+)(?:-(\d+))?", text)
+    if not match:
+        raise argparse.ArgumentTypeError(f"seeds must be N or N-M (e.g. 1-12), got '{text}'")
+    first = int(match.group(1))
+    last = int(match.group(2) or first)
+    if last < first:
+        raise argparse.ArgumentTypeError(f"seeds {text}: the range is empty")
+    return list(range(first, last + 1))
+
+
+def run(command, tool):
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.stderr.write(f"{tool}: {' '.join(command)} failed ({result.returncode}):\n"
+                         f"{result.stdout}{result.stderr}")
+        sys.exit(1)
+
+
+def simulate(rowloc, scenario, seed, run_dir, tool):
+    """`rowloc simulate SCENARIO --seed N` into run_dir (sensors.ndjson, truth.ndjson)."""
+    run([rowloc, "simulate", scenario, "-o", run_dir, "--seed", str(seed)], tool)
+
+
+def replay_and_evaluate(rowloc, run_dir, vehicle, filter_path, skip, out_dir, tool):
+    """`rowloc replay` of run_dir's log with the vehicle, filter and skipped sensors, then `rowloc
+    evaluate --clip-to-truth` into out_dir; returns its report.json (docs/validation.md)."""
+    os.makedirs(out_dir, exist_ok=True)
+    estimates = os.path.join(out_dir, "estimates.ndjson")
+    skips = [a for sensor in skip for a in ("--skip", sensor)]
+    run([rowloc, "replay", os.path.join(run_dir, "sensors.ndjson"), "--vehicle", vehicle, "--filter", filter_path,
+         *skips, "-o", estimates], tool)
+    report_dir = os.path.join(out_dir, "report")
+    run([rowloc, "evaluate", "--clip-to-truth", os.path.join(run_dir, "truth.ndjson"), estimates, "--no-plots", "-o",
+         report_dir], tool)
+    with open(os.path.join(report_dir, "report.json")) as f:
+        return json.load(f)
+
+
+def sensor_nis(report, sensor):
+    """The NIS summary of one sensor's updates in a report, or None when it has no updates."""
+    return next((s["nis"] for s in report.get("innovations", []) if s["sensor"] == sensor), None)
+
+
+def check_inputs(parser, paths, rowloc):
+    for path in paths:
+        if not os.path.isfile(path):
+            parser.error(f"no such file: {path}")
+    if not os.access(rowloc, os.X_OK):
+        parser.error(f"{rowloc} is not an executable: build first, or name it with --rowloc")
