@@ -42,3 +42,9 @@ rowloc_script_test(tune_noise_rejects_overlapping_seeds OFF "--train and --test 
 rowloc_script_test(tune_noise_names_a_sensor_without_updates OFF
   "seed 1: no 'ultrasonic' updates \\(the run has: gnss, imu, nonholonomic, wheels\\)"
   tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor ultrasonic --train 1 --test 2)
+# A NIS that jumps across 1 (a stand-in rowloc whose wheel NIS per dof is 1.5 below 0.05 rad/s and
+# 0.5 above) has no match: the bisection says where it jumps instead of returning a value.
+rowloc_command_test(scripts.tune_noise_reports_a_jump_it_cannot_match OFF
+  "the NIS per dof jumps from 1\\.5000 to 0\\.5000 between factors 0\\.499[0-9]* and 0\\.50*: no value matches"
+  ${PROJECT_SOURCE_DIR}/scripts/tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2
+  --rowloc ${PROJECT_SOURCE_DIR}/tests/data/fake-rowloc-nis-step)
