@@ -381,8 +381,13 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
     if (x_(kappa) > max_kappa[i]) project(kappa, max_kappa[i]);
   }
   if (!projected) return;
+  // A projection moves every correlated state, the heading and steering angles too: wrapped again.
   // A later wheel's projection moves the earlier wheels' correlated states, by little: the limits
   // themselves are then kept exactly.
+  x_(L::kPhi) = WrapAngle(x_(L::kPhi));
+  for (const int d : layout_.steering) {
+    if (d >= 0) x_(d) = WrapAngle(x_(d));
+  }
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     ClampWheelCalibration(x_, i);
     double& kappa = x_(layout_.slip_compliance[i]);
