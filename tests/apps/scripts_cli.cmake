@@ -48,3 +48,16 @@ rowloc_command_test(scripts.tune_noise_reports_a_jump_it_cannot_match OFF
   "the NIS per dof jumps from 1\\.5000 to 0\\.5000 between factors 0\\.499[0-9]* and 0\\.50*: no value matches"
   ${PROJECT_SOURCE_DIR}/scripts/tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2
   --rowloc ${PROJECT_SOURCE_DIR}/tests/data/fake-rowloc-nis-step)
+
+# validate-sim --seeds: the scenario's replays, then the seed sweeps of the default filter and of the
+# vehicle's own file (the differential has one) in one table.
+rowloc_command_test(scripts.validate_sim_sweeps_seeds ON
+  "\\| slip-odometry-turns \\| default \\| [0-9.]+ / [0-9.]+ \\| [0-2] of 2 \\| 0\\.[0-9]+ / [0-9.]+ \\| [0-2] of 2 \\| 0\\.9[0-9] \\(wheels\\) \\|.*\\| slip-odometry-turns \\| differential \\| .* \\| 1\\.9[0-9] \\(wheels\\) \\|"
+  ${PROJECT_SOURCE_DIR}/scripts/validate-sim --seeds 1-2 $<TARGET_FILE:rowloc> ${CMAKE_CURRENT_BINARY_DIR}/validate-seeds
+  slip-odometry-turns)
+rowloc_command_test(scripts.validate_sim_rejects_an_empty_seed_range OFF "validate-sim: seeds 3-1: the range is empty"
+  ${PROJECT_SOURCE_DIR}/scripts/validate-sim --seeds 3-1 $<TARGET_FILE:rowloc> ${CMAKE_CURRENT_BINARY_DIR}/validate-seeds-bad
+  slip-odometry-turns)
+rowloc_command_test(scripts.validate_sim_rejects_malformed_seeds OFF "validate-sim: --seeds must be N or N-M \\(e\\.g\\. 1-12\\), got '1,2'"
+  ${PROJECT_SOURCE_DIR}/scripts/validate-sim --seeds 1,2 $<TARGET_FILE:rowloc> ${CMAKE_CURRENT_BINARY_DIR}/validate-seeds-bad
+  slip-odometry-turns)
