@@ -37,17 +37,19 @@ def simulate(rowloc, scenario, seed, run_dir, tool):
     run([rowloc, "simulate", scenario, "-o", run_dir, "--seed", str(seed)], tool)
 
 
-def replay_and_evaluate(rowloc, run_dir, vehicle, filter_path, skip, out_dir, tool):
-    """`rowloc replay` of run_dir's log with the vehicle, filter and skipped sensors, then `rowloc
-    evaluate --clip-to-truth` into out_dir; returns its report.json (docs/validation.md)."""
+def replay_and_evaluate(rowloc, run_dir, vehicle, filter_path, skip, out_dir, tool, row_map=None):
+    """`rowloc replay` of run_dir's log with the vehicle, filter and skipped sensors (and the row
+    map, for the map-aided update), then `rowloc evaluate --clip-to-truth` (with the map: along and
+    across the rows) into out_dir; returns its report.json (docs/validation.md)."""
     os.makedirs(out_dir, exist_ok=True)
     estimates = os.path.join(out_dir, "estimates.ndjson")
     skips = [a for sensor in skip for a in ("--skip", sensor)]
+    map_args = ["--map", row_map] if row_map else []
     run([rowloc, "replay", os.path.join(run_dir, "sensors.ndjson"), "--vehicle", vehicle, "--filter", filter_path,
-         *skips, "-o", estimates], tool)
+         *skips, *map_args, "-o", estimates], tool)
     report_dir = os.path.join(out_dir, "report")
-    run([rowloc, "evaluate", "--clip-to-truth", os.path.join(run_dir, "truth.ndjson"), estimates, "--no-plots", "-o",
-         report_dir], tool)
+    run([rowloc, "evaluate", "--clip-to-truth", os.path.join(run_dir, "truth.ndjson"), estimates, *map_args,
+         "--no-plots", "-o", report_dir], tool)
     with open(os.path.join(report_dir, "report.json")) as f:
         return json.load(f)
 
