@@ -15,6 +15,10 @@ namespace rowloc::localization {
 
 using L = StateLayout;
 
+/// R_w's domain, a factor of the nominal radius (ProjectStates, ClampWheelCalibration).
+constexpr double kMinRadiusFactor = 0.5;
+constexpr double kMaxRadiusFactor = 1.5;
+
 namespace {
 
 std::vector<std::size_t> WheelIndex(const mapio::VehicleConfig& vehicle, const std::vector<std::string>& order) {
@@ -355,9 +359,12 @@ std::vector<double> VehicleEkf::WheelSlip() const {
 
 void VehicleEkf::ProjectStates(bool before_wheel_model) {
   if (!initialised_) return;
-  for (const int d : layout_.steering) {
-    if (d >= 0) x_(d) = WrapAngle(x_(d));
-  }
+  const auto wrap_steering = [this] {
+    for (const int d : layout_.steering) {
+      if (d >= 0) x_(d) = WrapAngle(x_(d));
+    }
+  };
+  wrap_steering();
   if (!layout_.slip_aware()) return;
   const SlipAwareOdometryConfig& slip = config_.slip_aware_odometry;
   // The traction from the acceleration (a sine and cosine per wheel) only matters where the wheel
@@ -373,8 +380,8 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     const double nominal = vehicle_.wheels[i].nominal_radius_m;
     const int radius = layout_.rolling_radius[i], kappa = layout_.slip_compliance[i];
-    if (x_(radius) < 0.5 * nominal) project(radius, 0.5 * nominal);
-    if (x_(radius) > 1.5 * nominal) project(radius, 1.5 * nominal);
+    if (x_(radius) < kMinRadiusFactor * nominal) project(radius, kMinRadiusFactor * nominal);
+    if (x_(radius) > kMaxRadiusFactor * nominal) project(radius, kMaxRadiusFactor * nominal);
     if (x_(kappa) < 0.0) project(kappa, 0.0);
     const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
     max_kappa[i] = mu > 0.0 ? slip.max_model_slip / mu : std::numeric_limits<double>::infinity();
@@ -385,9 +392,7 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
   // A later wheel's projection moves the earlier wheels' correlated states, by little: the limits
   // themselves are then kept exactly.
   x_(L::kPhi) = WrapAngle(x_(L::kPhi));
-  for (const int d : layout_.steering) {
-    if (d >= 0) x_(d) = WrapAngle(x_(d));
-  }
+  wrap_steering();
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {
     ClampWheelCalibration(x_, i);
     double& kappa = x_(layout_.slip_compliance[i]);
@@ -398,7 +403,7 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
 void VehicleEkf::ClampWheelCalibration(Eigen::VectorXd& x, std::size_t wheel) const {
   const double nominal = vehicle_.wheels[wheel].nominal_radius_m;
   double& radius = x(layout_.rolling_radius[wheel]);
-  radius = std::clamp(radius, 0.5 * nominal, 1.5 * nominal);
+  radius = std::clamp(radius, kMinRadiusFactor * nominal, kMaxRadiusFactor * nominal);
   double& kappa = x(layout_.slip_compliance[wheel]);
   kappa = std::max(kappa, 0.0);
 }
