@@ -25,6 +25,8 @@
 // the cache misses as it would in a run.
 // BM_RowMapRangingCandidates: RowMapRanging::Candidates alone, one sensor (us_front_left), from 4096
 // filter poses in random lanes, with the window the filter uses at the SetPose covariance.
+// BM_RowMapRangingConstruction: loading that map into the filter (VehicleEkf::AttachRowMap's work):
+// the R-tree, the smoothed row directions and the lane clearances (two ray casts per segment).
 // Run the Release build with
 //   map_aided_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include "rowloc/geometry/row_map.hpp"
@@ -369,6 +371,15 @@ void BM_RowMapRangingCandidates(benchmark::State& state) {
   state.counters["segments"] = static_cast<double>(w.map.SegmentCount());
 }
 
+void BM_RowMapRangingConstruction(benchmark::State& state) {
+  const World& w = TheWorld();
+  for (auto _ : state) {
+    const loc::RowMapRanging ranging(w.map, w.map.origin, w.config.map_aided.row_smoothing_m);
+    benchmark::DoNotOptimize(&ranging);
+  }
+  state.counters["segments"] = static_cast<double>(w.map.SegmentCount());
+}
+
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4Sensors, range, loc::MapAidedMethod::kRange);
@@ -377,3 +388,4 @@ BENCHMARK_CAPTURE(BM_MapAidedUpdate4Sensors, ellipsoid_cut_deprior, loc::MapAide
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4SensorsOneStamp, range, loc::MapAidedMethod::kRange);
 BENCHMARK_CAPTURE(BM_MapAidedUpdate4SensorsDriving, range, loc::MapAidedMethod::kRange);
 BENCHMARK(BM_RowMapRangingCandidates);
+BENCHMARK(BM_RowMapRangingConstruction)->Unit(benchmark::kMillisecond);

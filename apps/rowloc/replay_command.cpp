@@ -317,6 +317,9 @@ void RunReplay(const ReplayOptions& o) {
                  "{} contradicting, {} uninformative, {} degenerate",
                  localization::MapAidedMethodName(config.map_aided.method), s.echoes, s.no_segment, s.ambiguous,
                  s.contradicting, s.uninformative, s.degenerate);
+    spdlog::info("map-aided association: {} echoes skipped with an uncertain heading, {} with the sensor inside a "
+                 "canopy outline, {} with an ambiguous lane",
+                 s.heading_uncertain, s.inside_outline, s.lane_ambiguous);
     const geometry::SegmentQueryCache& cache = ekf.row_search_cache();
     spdlog::info("row search: {} of {} R-tree box queries answered from the cache ({} m margin)", cache.hits(),
                  cache.hits() + cache.misses(), cache.margin_m());

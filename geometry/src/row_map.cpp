@@ -1,5 +1,10 @@
 #include "rowloc/geometry/row_map.hpp"
 
+#include <boost/geometry/algorithms/correct.hpp>
+#include <boost/geometry/algorithms/within.hpp>
+#include <boost/geometry/geometries/point_xy.hpp>
+#include <boost/geometry/geometries/ring.hpp>
+
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -97,6 +102,17 @@ RowMap MakeSampleRowMap(const SampleRowMapParams& p) {
     map.rows.push_back(std::move(row));
   }
   return map;
+}
+
+bool InsideOutline(const Row& row, const Eigen::Vector2d& point) {
+  if (!point.allFinite()) throw std::invalid_argument("InsideOutline: point not finite");
+  if (!row.closed || row.points_m.size() < 3) return false;
+  using BoostPoint = boost::geometry::model::d2::point_xy<double>;
+  boost::geometry::model::ring<BoostPoint> ring;
+  ring.reserve(row.points_m.size() + 1);
+  for (const Eigen::Vector2d& p : row.points_m) ring.emplace_back(p.x(), p.y());
+  boost::geometry::correct(ring);  // closes the ring and orders it clockwise, as the model expects
+  return boost::geometry::within(BoostPoint(point.x(), point.y()), ring);
 }
 
 }  // namespace rowloc::geometry

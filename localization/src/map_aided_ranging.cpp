@@ -127,7 +127,45 @@ Eigen::Vector2d SmoothedTangent(const Outline& outline, const std::vector<double
   return chord.normalized();
 }
 
+/// Twice the signed area of a closed outline (shoelace): > 0 for counter-clockwise vertices.
+double TwiceSignedArea(const geometry::Row& row) {
+  double twice = 0.0;
+  for (std::size_t i = 0; i < row.points_m.size(); ++i) {
+    const auto [p, q] = row.Segment(i);
+    twice += p.x() * q.y() - q.x() * p.y();
+  }
+  return twice;
+}
+
+/// Distance from `origin` along `direction` (unit) to the first segment of a row other than
+/// `own_row`, +inf when there is none within kLaneClearanceSearchM: ray casts through the index,
+/// each restarted just past a hit on own_row (a concave outline may be crossed more than once).
+double ClearanceAlong(const geometry::SegmentIndex& index, std::size_t own_row, const Eigen::Vector2d& origin,
+                      const Eigen::Vector2d& direction) {
+  constexpr double kStepPastHitM = 1e-6;
+  constexpr int kMaxOwnCrossings = 64;
+  double travelled = kStepPastHitM;  // start off the segment itself
+  for (int crossing = 0; crossing < kMaxOwnCrossings && travelled < kLaneClearanceSearchM; ++crossing) {
+    const auto hit = index.RayCast(origin + travelled * direction, direction, kLaneClearanceSearchM - travelled);
+    if (!hit) break;
+    travelled += hit->hit.range_m;
+    if (index.entries()[hit->entry].row != own_row) return travelled;
+    travelled += kStepPastHitM;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
+
+void RowMapRanging::MeasureLaneClearances() {
+  for (std::size_t e = 0; e < shapes_.size(); ++e) {
+    const geometry::SegmentIndex::Entry& entry = index_.entries()[e];
+    const Eigen::Vector2d middle = 0.5 * (entry.segment.a + entry.segment.b);
+    const Eigen::Vector2d left(-shapes_[e].tangent.y(), shapes_[e].tangent.x());
+    shapes_[e].left_clearance_m = ClearanceAlong(index_, entry.row, middle, left);
+    shapes_[e].right_clearance_m = ClearanceAlong(index_, entry.row, middle, -left);
+  }
+}
 
 std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::RowMap& map, double smoothing_m) {
   std::vector<EntryShape> shapes;
@@ -140,6 +178,7 @@ std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::Row
     }
     const double period = row.closed ? outline.length() : 0.0;
     const std::size_t n = row.points_m.size();
+    const double orientation = row.closed ? (TwiceSignedArea(row) >= 0.0 ? 1.0 : -1.0) : 0.0;
     for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
       const auto [a, b] = row.Segment(i);
       const double length = (b - a).norm();
@@ -148,8 +187,10 @@ std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::Row
       const auto tangent = [&](double centre, double min_length) {
         return SmoothedTangent(outline, corner_arcs, period, centre, smoothing_m, min_length, own);
       };
-      shapes.push_back(EntryShape{tangent(start + 0.5 * length, length), tangent(start, 0.0),
-                                  tangent(start + length, 0.0), corner[i], corner[(i + 1) % n]});
+      EntryShape shape{tangent(start + 0.5 * length, length), tangent(start, 0.0), tangent(start + length, 0.0),
+                       corner[i], corner[(i + 1) % n]};
+      shape.outward = orientation * Eigen::Vector2d(own.y(), -own.x());  // right of a counter-clockwise ring
+      shapes.push_back(shape);
     }
   }
   return shapes;
@@ -253,7 +294,11 @@ RowMapRanging::RowMapRanging(const geometry::RowMap& map, const geometry::GeoOri
     : RowMapRanging(InFilterFrame(map, filter_origin), CheckedSmoothing(row_smoothing_m)) {}
 
 RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoothing_m)
-    : index_(geometry::SegmentIndex::FromRowMap(local_map)), shapes_(Shapes(local_map, row_smoothing_m)) {}
+    : index_(geometry::SegmentIndex::FromRowMap(local_map)),
+      shapes_(Shapes(local_map, row_smoothing_m)),
+      rows_(local_map.rows) {
+  MeasureLaneClearances();
+}
 
 std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
                                                      double max_range_m, double window_m) const {
@@ -274,6 +319,17 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
   // The nearest hit and every segment within the window behind it, in one search of the R-tree.
   const std::vector<geometry::SegmentIndex::Hit>& hits = buffers.hits;
   index_.ConeCastNearest(cone, window_m, buffers.hits, &buffers.query_cache);
+  // From inside a closed outline the nearest hit is its inner side (a hit at a vertex may show the
+  // inner side of a segment from outside too: the outline itself decides).
+  buffers.sensor_inside_outline = false;
+  if (!hits.empty()) {
+    const geometry::SegmentIndex::Hit& nearest = hits.front();
+    const std::size_t row = index_.entries()[nearest.entry].row;
+    if (nearest.hit.normal.dot(shapes_[nearest.entry].outward) < 0.0 && geometry::InsideOutline(rows_[row], at.position)) {
+      buffers.sensor_inside_outline = true;
+      return candidates;
+    }
+  }
   // The echo is the nearest point of the outlines in the cone, so within one row only its nearest
   // hit is physical (a farther segment of the same outline is hidden or not the first echo);
   // different rows are alternatives for the data association (a prediction error of a lane).
@@ -281,7 +337,12 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
   for (auto hit = hits.begin(); hit != hits.end(); ++hit) {
     const geometry::SegmentIndex::Entry& entry = index_.entries()[hit->entry];
     if (std::any_of(hits.begin(), hit, [&](const auto& nearer) { return row_of(nearer) == entry.row; })) continue;
-    if (auto c = Linearize(*hit, entry.segment, shapes_[hit->entry], pose, mount, at)) candidates.push_back(*c);
+    const EntryShape& shape = shapes_[hit->entry];
+    if (auto c = Linearize(*hit, entry.segment, shape, pose, mount, at)) {
+      const bool sensor_on_left = hit->hit.normal.dot(Eigen::Vector2d(-shape.tangent.y(), shape.tangent.x())) >= 0.0;
+      c->lane_clearance_m = sensor_on_left ? shape.left_clearance_m : shape.right_clearance_m;
+      candidates.push_back(*c);
+    }
   }
   return candidates;
 }

@@ -51,11 +51,22 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   trace.measured_range_m = *ping.range_m;
   trace.prior_position_m = trace.posterior_position_m = pose.head<2>();
   trace.prior_covariance = trace.posterior_covariance = pose_covariance.topLeftCorner<2, 2>();
+  // Association checks 1-3 of map_aided_ranging.hpp: the heading, the sensor inside a canopy, the lane.
+  if (config.k_sigma * std::sqrt(pose_covariance(2, 2)) > mount.cone_half_angle_rad) {
+    ++stats.heading_uncertain;
+    trace.outcome = "heading_uncertain";
+    return result;
+  }
   // Candidates: every surface within k sigma (position and range) of the nearest predicted one.
   const double window_m =
       config.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config.range_sigma_m);
   const std::vector<EchoCandidate>& candidates =
       ranging_->Candidates(pose, mount, config.max_range_m, window_m, candidate_buffers_);
+  if (candidate_buffers_.sensor_inside_outline) {
+    ++stats.inside_outline;
+    trace.outcome = "inside_outline";
+    return result;
+  }
   if (candidates.empty()) {
     ++stats.no_segment;
     trace.outcome = "no_segment";
@@ -73,6 +84,12 @@ ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
   }
   trace.segment = ranging_->index().entries()[best->entry].segment;
   trace.line = best->edge;
+  const double range_variance = best->jacobian * pose_covariance * best->jacobian.transpose();
+  if (config.k_sigma * std::sqrt(range_variance) > 0.5 * best->lane_clearance_m) {
+    ++stats.lane_ambiguous;
+    trace.outcome = "lane_ambiguous";
+    return result;
+  }
   const MapAidedMeasurement m = MakeMapAidedMeasurement(*best, mount, pose, pose_covariance, *ping.range_m, config);
   if (m.innovation.size() == 0) {
     switch (m.cut_status) {

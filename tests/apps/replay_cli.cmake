@@ -59,7 +59,7 @@ rowloc_cli_test(replay_rejects_unknown_skip_type OFF "--skip"
 # vehicle without rangers.
 set(_ugv ${PROJECT_SOURCE_DIR}/config/vehicles/vineyard-ugv-4ws.json)
 rowloc_cli_test(replay_map_aided_uses_echoes ON
-                "map-aided \\(range\\): [0-9]+ echoes; [0-9]+ without a row segment.*updates ultrasonic: [0-9]+ accepted"
+                "map-aided \\(range\\): [0-9]+ echoes; [0-9]+ without a row segment.*map-aided association: [1-9][0-9]* echoes skipped with an uncertain heading, [0-9]+ with the sensor inside a canopy outline, [0-9]+ with an ambiguous lane.*updates ultrasonic: [0-9]+ accepted"
                 replay ${_sim_out}/vineyard/sensors.ndjson --vehicle ${_ugv} --map ${_sim_out}/vineyard/row-map.geojson
                 -o ${_replay_out}/vineyard-map.ndjson)
 set_tests_properties(apps.simulate_runs_vineyard PROPERTIES FIXTURES_SETUP simulate_vineyard)

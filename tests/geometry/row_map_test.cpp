@@ -5,7 +5,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 
@@ -114,6 +116,51 @@ TEST(RowSegments, CountAndEndpoints) {
   EXPECT_EQ(a, Eigen::Vector2d(0.0, 3.0));
   EXPECT_EQ(b, Eigen::Vector2d(0.0, 2.0));
   EXPECT_EQ(Row{}.SegmentCount(), 0u);
+}
+
+// --- InsideOutline -----------------------------------------------------------------------------
+
+/// An L-shaped (concave) outline: the square [0, 2]^2 without its quadrant [1, 2] x [1, 2].
+Row LShape(bool counter_clockwise) {
+  Row row{"L", {{0.0, 0.0}, {2.0, 0.0}, {2.0, 1.0}, {1.0, 1.0}, {1.0, 2.0}, {0.0, 2.0}}, true};
+  if (!counter_clockwise) std::reverse(row.points_m.begin(), row.points_m.end());
+  return row;
+}
+
+TEST(InsideOutline, ConcaveOutlineInEitherVertexOrder) {
+  for (const bool ccw : {true, false}) {
+    const Row row = LShape(ccw);
+    EXPECT_TRUE(InsideOutline(row, {0.5, 0.5})) << ccw;
+    EXPECT_TRUE(InsideOutline(row, {1.5, 0.5})) << ccw;
+    EXPECT_TRUE(InsideOutline(row, {0.5, 1.5})) << ccw;
+    EXPECT_FALSE(InsideOutline(row, {1.5, 1.5})) << ccw;  // the notch
+    EXPECT_FALSE(InsideOutline(row, {3.0, 0.5})) << ccw;
+    EXPECT_FALSE(InsideOutline(row, {-0.1, 1.0})) << ccw;
+    EXPECT_FALSE(InsideOutline(row, {1.0, 0.0})) << ccw;  // on the outline: not strictly inside
+  }
+}
+
+TEST(InsideOutline, AgreesWithTheSquareOnRandomPoints) {
+  const Row square{"square", {{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}, true};
+  std::uint32_t state = 12345u;
+  const auto uniform = [&state] {  // a small LCG: deterministic and independent of the library
+    state = state * 1664525u + 1013904223u;
+    return -2.0 + 4.0 * (state >> 8) / double(1u << 24);
+  };
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector2d p(uniform(), uniform());
+    if (std::abs(std::abs(p.x()) - 1.0) < 1e-9 || std::abs(std::abs(p.y()) - 1.0) < 1e-9) continue;
+    EXPECT_EQ(InsideOutline(square, p), p.cwiseAbs().maxCoeff() < 1.0) << p.transpose();
+  }
+}
+
+TEST(InsideOutline, OpenRowsHaveNoInsideAndBadPointsThrow) {
+  const RowMap map = ValidMap();
+  EXPECT_FALSE(InsideOutline(map.rows[0], {5.0, 0.0}));   // on the open row
+  EXPECT_FALSE(InsideOutline(map.rows[0], {5.0, -1.0}));
+  EXPECT_TRUE(InsideOutline(map.rows[1], {0.2, 2.2}));    // the triangle
+  EXPECT_THROW(InsideOutline(map.rows[1], {kNaN, 2.2}), std::invalid_argument);
+  EXPECT_THROW(InsideOutline(map.rows[1], {0.2, kInf}), std::invalid_argument);
 }
 
 // --- MakeSampleRowMap --------------------------------------------------------------------------

@@ -57,6 +57,12 @@ struct RowMap {
 /// reflecting segments, which is all that localization needs).
 std::optional<std::string> ValidateRowMap(const RowMap& map);
 
+/// Whether `point` lies strictly inside a closed row's outline (Boost.Geometry `within`, either
+/// vertex order); false for an open row and for a point on the outline. A self-intersecting
+/// outline gives Boost.Geometry's answer for it. Throws std::invalid_argument for a non-finite
+/// point.
+bool InsideOutline(const Row& row, const Eigen::Vector2d& point);
+
 /// Parameters of the synthetic sample map shipped in maps/ (see docs/map-format.md, "The sample map").
 struct SampleRowMapParams {
   int row_count = 10;               ///< number of rows

@@ -11,7 +11,9 @@
 // the course of that displacement (corrected by the mean steering angle, reversed when the wheels
 // turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic echoes are
 // used once a row map is attached (AttachRowMap; map_aided_ranging.hpp, issue 5): each echo is one
-// update named "ultrasonic" by the method of config.map_aided, against the segment it comes from.
+// update named "ultrasonic" by the method of config.map_aided, against the segment it comes from,
+// once its association is certain (map_aided_ranging.hpp, checks 1-3: heading, sensor inside a
+// canopy, lane; otherwise the echo is skipped and counted in MapAidedStats).
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
 // max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4, a non-positive range, an
@@ -67,13 +69,18 @@ struct MapAidedStats {
   std::size_t contradicting = 0;  ///< cut methods: the slab misses the k-sigma ellipse (reported, not clipped)
   std::size_t uninformative = 0;  ///< cut methods: the slab holds the whole ellipse (nothing to update)
   std::size_t degenerate = 0;     ///< no usable geometry (grazing beam, sensor on a vertex, degenerate slab)
+  // Echoes not used because their association is not certain (map_aided_ranging.hpp, checks 1-3):
+  std::size_t heading_uncertain = 0;  ///< k sigma_phi above the cone's half aperture
+  std::size_t inside_outline = 0;     ///< the predicted sensor inside a canopy outline
+  std::size_t lane_ambiguous = 0;     ///< k sigma of the predicted range above half the lane clearance
 };
 /// What one echo did to the position (the ellipse before and after it), for plots and debugging:
 /// filled for every echo with a range that reaches the map-aided update (MapAidedStats::echoes).
 struct EchoTrace {
   std::string sensor;
   double measured_range_m = 0.0;
-  /// "accepted", "gated", "no_segment", "contradicting", "uninformative" or "degenerate".
+  /// "accepted", "gated", "no_segment", "contradicting", "uninformative", "degenerate",
+  /// "heading_uncertain", "inside_outline" or "lane_ambiguous".
   std::string outcome;
   Eigen::Vector2d prior_position_m = Eigen::Vector2d::Zero();
   Eigen::Matrix2d prior_covariance = Eigen::Matrix2d::Zero();      ///< of the position, m^2
