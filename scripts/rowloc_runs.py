@@ -37,6 +37,16 @@ def simulate(rowloc, scenario, seed, run_dir, tool):
     run([rowloc, "simulate", scenario, "-o", run_dir, "--seed", str(seed)], tool)
 
 
+def row_map_of(run_dir, scenario, tool):
+    """The row map a simulated run wrote (row-map.geojson, for --with-map); ends the script when the
+    scenario has no world and so no map."""
+    row_map = os.path.join(run_dir, "row-map.geojson")
+    if not os.path.isfile(row_map):
+        sys.stderr.write(f"{tool}: --with-map: {scenario} writes no row map (a scenario without a world)\n")
+        sys.exit(1)
+    return row_map
+
+
 def replay_and_evaluate(rowloc, run_dir, vehicle, filter_path, skip, out_dir, tool, row_map=None):
     """`rowloc replay` of run_dir's log with the vehicle, filter and skipped sensors (and the row
     map, for the map-aided update), then `rowloc evaluate --clip-to-truth` (with the map: along and

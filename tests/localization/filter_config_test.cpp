@@ -189,6 +189,16 @@ TEST(FilterConfig, DifferentialFileDiffersInTheWheelSpeedSigma) {
   EXPECT_EQ(FilterConfig{}.wheels.speed_sigma_radps, 0.1);  // the default, for every vehicle
 }
 
+TEST(FilterConfig, RoughCanopyFileDiffersInTheRangeSigma) {
+  // The range sigma identified from the ultrasonic NIS on the rough-canopy worlds (scripts/tune-noise
+  // --with-map, docs/map-aided-update.md §3.3): leaf-scale roughness the 3 mm of the echoes omit.
+  FilterConfig expected;
+  expected.name = "rough-canopy";
+  expected.map_aided.range_sigma_m = 0.003891;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("rough-canopy")), expected);
+  EXPECT_EQ(FilterConfig{}.map_aided.range_sigma_m, 0.003);  // the default: the echoes' own noise
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;
