@@ -1,5 +1,11 @@
 #include "rowloc/geometry/row_map.hpp"
 
+// Boost 1.74's Boost.Math (pulled in by Boost.Geometry) includes a header it itself deprecated
+// (as in segment_index.cpp): without this the build prints a deprecation note.
+#ifndef BOOST_ALLOW_DEPRECATED_HEADERS
+#define BOOST_ALLOW_DEPRECATED_HEADERS
+#endif
+#include <boost/geometry/algorithms/area.hpp>
 #include <boost/geometry/algorithms/correct.hpp>
 #include <boost/geometry/algorithms/within.hpp>
 #include <boost/geometry/geometries/point_xy.hpp>
@@ -102,6 +108,17 @@ RowMap MakeSampleRowMap(const SampleRowMapParams& p) {
     map.rows.push_back(std::move(row));
   }
   return map;
+}
+
+double OutlineSignedArea(const Row& row) {
+  if (!row.closed || row.points_m.size() < 3) return 0.0;
+  // An open (not repeated last vertex), counter-clockwise ring: Boost.Geometry's area is then
+  // positive for counter-clockwise vertices and negative for clockwise ones.
+  using BoostPoint = boost::geometry::model::d2::point_xy<double>;
+  boost::geometry::model::ring<BoostPoint, false, false> ring;
+  ring.reserve(row.points_m.size());
+  for (const Eigen::Vector2d& p : row.points_m) ring.emplace_back(p.x(), p.y());
+  return boost::geometry::area(ring);
 }
 
 bool InsideOutline(const Row& row, const Eigen::Vector2d& point) {

@@ -127,16 +127,6 @@ Eigen::Vector2d SmoothedTangent(const Outline& outline, const std::vector<double
   return chord.normalized();
 }
 
-/// Twice the signed area of a closed outline (shoelace): > 0 for counter-clockwise vertices.
-double TwiceSignedArea(const geometry::Row& row) {
-  double twice = 0.0;
-  for (std::size_t i = 0; i < row.points_m.size(); ++i) {
-    const auto [p, q] = row.Segment(i);
-    twice += p.x() * q.y() - q.x() * p.y();
-  }
-  return twice;
-}
-
 /// Distance from `origin` along `direction` (unit) to the first segment of a row other than
 /// `own_row`, +inf when there is none within kLaneClearanceSearchM: ray casts through the index,
 /// each restarted just past a hit on own_row (a concave outline may be crossed more than once).
@@ -178,7 +168,7 @@ std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::Row
     }
     const double period = row.closed ? outline.length() : 0.0;
     const std::size_t n = row.points_m.size();
-    const double orientation = row.closed ? (TwiceSignedArea(row) >= 0.0 ? 1.0 : -1.0) : 0.0;
+    const double orientation = row.closed ? (geometry::OutlineSignedArea(row) >= 0.0 ? 1.0 : -1.0) : 0.0;
     for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
       const auto [a, b] = row.Segment(i);
       const double length = (b - a).norm();

@@ -140,6 +140,13 @@ TEST(InsideOutline, ConcaveOutlineInEitherVertexOrder) {
   }
 }
 
+TEST(OutlineSignedArea, PositiveCounterClockwiseNegativeClockwiseZeroOpen) {
+  EXPECT_DOUBLE_EQ(OutlineSignedArea(LShape(true)), 3.0);
+  EXPECT_DOUBLE_EQ(OutlineSignedArea(LShape(false)), -3.0);
+  EXPECT_EQ(OutlineSignedArea(ValidMap().rows[0]), 0.0);              // an open row
+  EXPECT_DOUBLE_EQ(OutlineSignedArea(ValidMap().rows[1]), 0.5);       // the triangle, counter-clockwise
+}
+
 TEST(InsideOutline, AgreesWithTheSquareOnRandomPoints) {
   const Row square{"square", {{-1.0, -1.0}, {1.0, -1.0}, {1.0, 1.0}, {-1.0, 1.0}}, true};
   std::uint32_t state = 12345u;

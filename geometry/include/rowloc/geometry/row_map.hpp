@@ -63,6 +63,10 @@ std::optional<std::string> ValidateRowMap(const RowMap& map);
 /// point.
 bool InsideOutline(const Row& row, const Eigen::Vector2d& point);
 
+/// Signed area of a closed row's outline, m^2: > 0 when its vertices run counter-clockwise
+/// (Boost.Geometry `area`); 0 for an open row.
+double OutlineSignedArea(const Row& row);
+
 /// Parameters of the synthetic sample map shipped in maps/ (see docs/map-format.md, "The sample map").
 struct SampleRowMapParams {
   int row_count = 10;               ///< number of rows

@@ -30,7 +30,7 @@
 //
 // Association checks (not in seed 002, whose filter starts in the right lane with a known heading;
 // added after twelve-seed sweeps found 4-6 of 12 runs of every vineyard scenario locked in a wrong
-// lane or on a wrong heading, docs/map-aided-update.md §4). An echo is used only when its
+// lane or on a wrong heading, docs/map-aided-update.md §3.2). An echo is used only when its
 // association is unambiguous at the k-sigma level (k = k_sigma):
 // 1. heading: k sigma_phi <= a. Beyond it the predicted beam may or may not contain the surface
 //    normal, so r(phi) switches between the perpendicular and the cone-edge model inside the
