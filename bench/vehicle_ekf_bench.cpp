@@ -89,7 +89,11 @@ struct Converged {
   std::vector<double> wheel_rates_radps;  ///< exact, vehicle order (wheel angles)
 
   Converged(const VehicleConfig& v, bool slip_aware, bool angles = false)
-      : ekf(v, Config(slip_aware, angles), kOrigin, Names(v)), lap(MakeLap(v, slip_aware, angles)) {
+      : Converged(v, Config(slip_aware, angles)) {}
+  /// With a whole filter configuration (its slip-aware and angle switches shape the lap).
+  Converged(const VehicleConfig& v, const loc::FilterConfig& config)
+      : ekf(v, config, kOrigin, Names(v)),
+        lap(MakeLap(v, config.slip_aware_odometry.enabled, config.wheels.angle_measurement)) {
     for (const auto& w : v.wheels) wheel_rates_radps.push_back(WheelRate(w));
     ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Vector3d(1e-4, 1e-4, 1e-4).asDiagonal());
     long accepted = 0, updates = 0;
@@ -144,9 +148,8 @@ struct Converged {
   }
 };
 
-void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware, bool steering = true,
-               bool angles = false) {
-  Converged c(v, slip_aware, angles);
+void RunCycles(benchmark::State& state, const VehicleConfig& v, const loc::FilterConfig& config, bool steering = true) {
+  Converged c(v, config);
   if (!steering) {  // issue 4's cycle exactly: predict + GPS + IMU + wheels (steering angles then float)
     for (auto& messages : c.lap) {
       std::erase_if(messages, [](const loc::SensorMessage& m) { return std::holds_alternative<loc::SteeringMessage>(m); });
@@ -163,11 +166,27 @@ void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware,
   state.counters["sim_s"] = 0.01 * static_cast<double>(c.cycle) - t0;
 }
 
+void RunCycles(benchmark::State& state, const VehicleConfig& v, bool slip_aware, bool steering = true,
+               bool angles = false) {
+  RunCycles(state, v, Converged::Config(slip_aware, angles), steering);
+}
+
 void BM_CycleSwerve(benchmark::State& state) { RunCycles(state, rowloc::mapio::AgrimaroSwerveConfig(), false); }
 void BM_CycleSwerveSlipAware(benchmark::State& state) { RunCycles(state, rowloc::mapio::AgrimaroSwerveConfig(), true); }
 void BM_Cycle4ws(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), false); }
 void BM_CycleDifferential(benchmark::State& state) { RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), false); }
 void BM_CycleTracked(benchmark::State& state) { RunCycles(state, rowloc::mapio::TrackedVehicleConfig(), false); }
+/// The 4WS UGV with config/filters/canopy-gnss.json (slip-aware, GNSS-bias states, correlated
+/// radius priors, three iterations of the wheel-speed update) against BM_Cycle4wsSlipAware.
+void BM_Cycle4wsSlipAware(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), true); }
+void BM_Cycle4wsCanopyGnss(benchmark::State& state) {
+  loc::FilterConfig config = Converged::Config(true);
+  config.gps.estimate_bias = true;
+  config.gps.bias_sigma_m = 0.2;
+  config.slip_aware_odometry.rolling_radius_prior_wheel_correlation = 0.99;
+  config.wheels.speed_update_iterations = 3;
+  RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), config);
+}
 /// Issue 4's cycle with wheel angles instead of speeds (wheels.angle_measurement; slip-aware).
 void BM_CycleDifferentialWheelAngles(benchmark::State& state) {
   RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), true, true, true);
@@ -261,6 +280,8 @@ void BM_KalmanUpdate2d(benchmark::State& state) {
 BENCHMARK(BM_CycleSwerve);
 BENCHMARK(BM_CycleSwerveSlipAware);
 BENCHMARK(BM_Cycle4ws);
+BENCHMARK(BM_Cycle4wsSlipAware);
+BENCHMARK(BM_Cycle4wsCanopyGnss);
 BENCHMARK(BM_CycleDifferential);
 BENCHMARK(BM_CycleDifferentialSlipAware);
 BENCHMARK(BM_CycleDifferentialWheelAngles);

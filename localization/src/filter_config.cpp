@@ -18,6 +18,8 @@ using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
 bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
 bool IsProbability(double value) { return std::isfinite(value) && value > 0.0 && value < 1.0; }
 
+constexpr int kMaxSpeedUpdateIterations = 10;  ///< wheels.speed_update_iterations (1 to this)
+
 /// What a value must be: finite and > 0 (the default), in (0, 1), finite and >= 0, or in [0, 1).
 enum class Domain { kPositive, kProbability, kNonNegative, kFraction };
 
@@ -47,6 +49,8 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation, Domain::kFraction},
       {"slip_aware_odometry.rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation,
        Domain::kFraction},
+      {"slip_aware_odometry.rolling_radius_prior_wheel_correlation", s.rolling_radius_prior_wheel_correlation,
+       Domain::kFraction},
       {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
       {"slip_aware_odometry.carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m,
        Domain::kNonNegative},
@@ -67,6 +71,8 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"gps.sigma_floor_sbas_m", c.gps.sigma_floor_sbas_m},
       {"gps.gate_probability", c.gps.gate_probability, Domain::kProbability},
       {"gps.reacquire_after_s", c.gps.reacquire_after_s},
+      {"gps.bias_sigma_m", c.gps.bias_sigma_m},
+      {"gps.bias_time_constant_s", c.gps.bias_time_constant_s},
       {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2},
       {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps},
       {"imu.gate_probability", c.imu.gate_probability, Domain::kProbability},
@@ -119,6 +125,7 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Number("max_model_slip"), s.Number("rolling_radius_noise_m_per_sqrt_m"),
                              s.Number("slip_compliance_noise_per_sqrt_m"), s.Number("slip_compliance_wheel_correlation"),
                              s.Number("rolling_radius_noise_wheel_correlation"),
+                             s.Number("rolling_radius_prior_wheel_correlation"),
                              s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
                              s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius"),
                              s.Number("carried_rolling_radius_change_sigma_m"),
@@ -137,7 +144,8 @@ FilterConfig ReadConfig(Reader& root) {
     Reader g = root.Object("gps");
     c.gps = {g.Number("sigma_scale"), g.Number("sigma_floor_rtk_fixed_m"), g.Number("sigma_floor_rtk_float_m"),
              g.Number("sigma_floor_sbas_m"), g.Number("gate_probability"),
-             g.Number("reacquire_after_s")};
+             g.Number("reacquire_after_s"), g.Bool("estimate_bias"), g.Number("bias_sigma_m"),
+             g.Number("bias_time_constant_s")};
     g.RejectUnknownKeys();
   }
   {
@@ -152,7 +160,8 @@ FilterConfig ReadConfig(Reader& root) {
                 w.Number("lateral_velocity_sigma_mps"), w.Number("gate_probability"),
                 w.Number("max_speed_radps"), w.Number("encoder_low_pass_time_constant_s"),
                 w.Bool("angle_measurement"), w.Number("angle_sigma_rad"),
-                w.Number("angle_rate_noise_radps_per_sqrt_hz"), w.Number("angle_max_prediction_sigma_rad")};
+                w.Number("angle_rate_noise_radps_per_sqrt_hz"), w.Number("angle_max_prediction_sigma_rad"),
+                static_cast<int>(w.Integer("speed_update_iterations", 1, kMaxSpeedUpdateIterations))};
     w.RejectUnknownKeys();
   }
   {
@@ -201,6 +210,9 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
         }
         break;
     }
+  }
+  if (!(config.wheels.speed_update_iterations >= 1 && config.wheels.speed_update_iterations <= kMaxSpeedUpdateIterations)) {
+    return "wheels.speed_update_iterations must be from 1 to " + std::to_string(kMaxSpeedUpdateIterations);
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {

@@ -44,7 +44,7 @@ WheelCentre CentreOf(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehic
 
 }  // namespace
 
-void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, LinearizedMeasurement& m) {
+void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, int gnss_bias_index, LinearizedMeasurement& m) {
   SetZero(m, 2, x.size());
   const double c = std::cos(x(L::kPhi)), s = std::sin(x(L::kPhi));
   m.predicted << x(L::kX) + c * l.x() - s * l.y(), x(L::kY) + s * l.x() + c * l.y();
@@ -52,6 +52,11 @@ void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, Lineari
   m.jacobian(1, L::kY) = 1.0;
   m.jacobian(0, L::kPhi) = -s * l.x() - c * l.y();
   m.jacobian(1, L::kPhi) = c * l.x() - s * l.y();
+  if (gnss_bias_index >= 0) {
+    m.predicted += x.segment<2>(gnss_bias_index);
+    m.jacobian(0, gnss_bias_index) = 1.0;
+    m.jacobian(1, gnss_bias_index + 1) = 1.0;
+  }
 }
 
 void ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, int accel_bias_index, LinearizedMeasurement& m) {
@@ -236,9 +241,10 @@ void VioModel(const Eigen::VectorXd& x, const Eigen::Vector2d& l, LinearizedMeas
 
 // The value-returning forms.
 
-LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m) {
+LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m,
+                                      int gnss_bias_index) {
   LinearizedMeasurement m;
-  GpsAntennaModel(x, lever_arm_m, m);
+  GpsAntennaModel(x, lever_arm_m, gnss_bias_index, m);
   return m;
 }
 

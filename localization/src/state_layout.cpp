@@ -3,7 +3,7 @@
 namespace rowloc::localization {
 
 StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias,
-                             bool wheel_angles, bool traction) {
+                             bool wheel_angles, bool traction, bool gnss_bias) {
   StateLayout layout;
   const std::size_t n = vehicle.wheels.size();
   layout.steering.assign(n, -1);
@@ -31,6 +31,10 @@ StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_awar
   if (traction && slip_aware_odometry) {
     for (std::size_t i = 0; i < n; ++i) layout.traction[i] = next++;
   }
+  if (gnss_bias) {
+    layout.gnss_bias = next;
+    next += 2;
+  }
   layout.size = next;
   return layout;
 }
@@ -50,6 +54,10 @@ std::vector<std::string> StateLayout::Names(const mapio::VehicleConfig& vehicle)
   if (accel_bias >= 0) {
     names[static_cast<std::size_t>(accel_bias)] = "bax_mps2";
     names[static_cast<std::size_t>(accel_bias) + 1] = "bay_mps2";
+  }
+  if (gnss_bias >= 0) {
+    names[static_cast<std::size_t>(gnss_bias)] = "gnss_bias_east_m";
+    names[static_cast<std::size_t>(gnss_bias) + 1] = "gnss_bias_north_m";
   }
   return names;
 }

@@ -65,7 +65,8 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
     : vehicle_(Checked(std::move(vehicle))),
       config_(Checked(std::move(config))),
       layout_(StateLayout::For(vehicle_, config_.slip_aware_odometry.enabled, config_.imu.estimate_accel_bias,
-                               config_.wheels.angle_measurement, config_.slip_aware_odometry.torque_sigma_nm > 0.0)),
+                               config_.wheels.angle_measurement, config_.slip_aware_odometry.torque_sigma_nm > 0.0,
+                               config_.gps.estimate_bias)),
       frame_(origin),
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
@@ -127,6 +128,9 @@ void VehicleEkf::PredictTo(double t) {
       BaseJacobian f;
       PredictStep(vehicle_, layout_, config_, x_, p_, dt, &f);
       smoother_->TransitionBlock(0, f);
+      if (layout_.gnss_bias >= 0) {
+        smoother_->TransitionBlock(layout_.gnss_bias, GnssBiasDecay(layout_, config_.gps, dt) * Eigen::Matrix2d::Identity());
+      }
     } else {
       PredictStep(vehicle_, layout_, config_, x_, p_, dt);
     }
@@ -152,7 +156,7 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
   }
   const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
   LinearizedMeasurement& h = update_buffers_.gnss;
-  GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), h);
+  GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), layout_.gnss_bias, h);
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
   double gate = gate_gps_;
@@ -217,7 +221,13 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
     b.noise.setZero(m, m);
     b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
     b.innovation = z - b.wheels.predicted;
+    const bool iterated = config_.wheels.speed_update_iterations > 1;
+    if (iterated) {
+      b.prior_state = x_;
+      b.prior_covariance = p_;
+    }
     result.updates.push_back(Update(wheels.time_s, "wheels", b.innovation, b.wheels.jacobian, b.noise, gate));
+    if (iterated && result.updates.back().outcome.accepted) IterateWheelSpeedUpdate(z);
   }
   // Non-holonomic constraint: no sideways wheel velocity (pseudo-measurement z = 0).
   WheelLateralVelocityModel(x_, vehicle_, layout_, b.wheels);
@@ -227,6 +237,24 @@ ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
   b.innovation = -b.wheels.predicted;
   result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.wheels.jacobian, b.noise, gate));
   return result;
+}
+
+void VehicleEkf::IterateWheelSpeedUpdate(const VectorRef& measured_radps) {
+  // Iterated EKF (filter_config.hpp, wheels.speed_update_iterations): from the prior (x0, P0),
+  // x_{i+1} = x0 + K_i (z - h(x_i) - H_i (x0 - x_i)), H_i and K_i at x_i; P from the last one.
+  // The gate was passed at the first linearization; the record keeps that update's NIS.
+  UpdateBuffers& b = update_buffers_;
+  for (int i = 1; i < config_.wheels.speed_update_iterations; ++i) {
+    ProjectStates(true);  // the linearization point inside the model's domain
+    WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
+                    config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
+    b.step = b.prior_state - x_;
+    b.step(L::kPhi) = WrapAngle(b.step(L::kPhi));
+    b.innovation = measured_radps - b.wheels.predicted - b.wheels.jacobian * b.step;
+    x_ = b.prior_state;
+    p_ = b.prior_covariance;
+    KalmanUpdate(x_, p_, b.innovation, b.wheels.jacobian, b.noise, std::numeric_limits<double>::infinity(), L::kPhi);
+  }
 }
 
 void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {

@@ -128,7 +128,7 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
   const double sigma = fix_sigma;
   Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
                                                std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
-  InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance);
+  InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance, true);
   // Initial speed from the encoders (mean wheel-centre speed), along the mean steering direction.
   double speed = 0.0;
   for (std::size_t i = 0; i < last_speed_radps_.size(); ++i) {
@@ -142,7 +142,8 @@ std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, cons
   return notice.str();
 }
 
-void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance) {
+void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
+                                 bool position_from_gnss) {
   const InitialisationConfig& init = config_.initialisation;
   x_.setZero();
   p_.setZero();
@@ -179,22 +180,37 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
     }
   }
   p_.diagonal() = variance;
-  if (layout_.slip_aware()) {  // correlated kappas (one terrain): rho sigma_a sigma_b
-    const auto sigma = [&](std::size_t i) {
+  if (layout_.slip_aware()) {  // correlated kappas and radii (one terrain): rho sigma_a sigma_b
+    const auto kappa_sigma = [&](std::size_t i) {
       return calibration_prior_.empty() ? slip.slip_compliance_sigma : calibration_prior_[i].slip_compliance_sigma;
+    };
+    const auto radius_sigma = [&](std::size_t i) {
+      return calibration_prior_.empty() ? slip.rolling_radius_sigma_m : calibration_prior_[i].rolling_radius_sigma_m;
     };
     for (std::size_t a = 0; a < layout_.wheel_count(); ++a) {
       for (std::size_t b = 0; b < layout_.wheel_count(); ++b) {
-        if (a != b) {
-          p_(layout_.slip_compliance[a], layout_.slip_compliance[b]) =
-              slip.slip_compliance_wheel_correlation * sigma(a) * sigma(b);
-        }
+        if (a == b) continue;
+        p_(layout_.slip_compliance[a], layout_.slip_compliance[b]) =
+            slip.slip_compliance_wheel_correlation * kappa_sigma(a) * kappa_sigma(b);
+        p_(layout_.rolling_radius[a], layout_.rolling_radius[b]) =
+            slip.rolling_radius_prior_wheel_correlation * radius_sigma(a) * radius_sigma(b);
       }
     }
   }
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topLeftCorner<3, 3>() = 0.5 * (pose_covariance + pose_covariance.transpose());
+  if (const int b = layout_.gnss_bias; b >= 0) {
+    // The bias starts at 0 with its stationary variance; a position taken from a fix is that fix
+    // minus the bias: (x, b) = (z - b, b) gives P_xx += s^2 I and P_xb = -s^2 I.
+    const double bias_variance = config_.gps.bias_sigma_m * config_.gps.bias_sigma_m;
+    p_(b, b) = p_(b + 1, b + 1) = bias_variance;
+    if (position_from_gnss) {
+      p_(L::kX, L::kX) += bias_variance;
+      p_(L::kY, L::kY) += bias_variance;
+      p_(L::kX, b) = p_(b, L::kX) = p_(L::kY, b + 1) = p_(b + 1, L::kY) = -bias_variance;
+    }
+  }
   time_s_ = t;
   gps_gated_since_s_.reset();
   initialised_ = true;

@@ -50,6 +50,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.slip_compliance_noise_per_sqrt_m, sb.slip_compliance_noise_per_sqrt_m);
   EXPECT_EQ(sa.slip_compliance_wheel_correlation, sb.slip_compliance_wheel_correlation);
   EXPECT_EQ(sa.rolling_radius_noise_wheel_correlation, sb.rolling_radius_noise_wheel_correlation);
+  EXPECT_EQ(sa.rolling_radius_prior_wheel_correlation, sb.rolling_radius_prior_wheel_correlation);
   EXPECT_EQ(sa.carried_rolling_radius_change_sigma_m, sb.carried_rolling_radius_change_sigma_m);
   EXPECT_EQ(sa.carried_slip_compliance_change_sigma, sb.carried_slip_compliance_change_sigma);
   EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
@@ -71,6 +72,9 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.gps.sigma_floor_sbas_m, b.gps.sigma_floor_sbas_m);
   EXPECT_EQ(a.gps.gate_probability, b.gps.gate_probability);
   EXPECT_EQ(a.gps.reacquire_after_s, b.gps.reacquire_after_s);
+  EXPECT_EQ(a.gps.estimate_bias, b.gps.estimate_bias);
+  EXPECT_EQ(a.gps.bias_sigma_m, b.gps.bias_sigma_m);
+  EXPECT_EQ(a.gps.bias_time_constant_s, b.gps.bias_time_constant_s);
   EXPECT_EQ(a.imu.accel_sigma_mps2, b.imu.accel_sigma_mps2);
   EXPECT_EQ(a.imu.gyro_sigma_radps, b.imu.gyro_sigma_radps);
   EXPECT_EQ(a.imu.gate_probability, b.imu.gate_probability);
@@ -85,6 +89,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.wheels.angle_sigma_rad, b.wheels.angle_sigma_rad);
   EXPECT_EQ(a.wheels.angle_rate_noise_radps_per_sqrt_hz, b.wheels.angle_rate_noise_radps_per_sqrt_hz);
   EXPECT_EQ(a.wheels.angle_max_prediction_sigma_rad, b.wheels.angle_max_prediction_sigma_rad);
+  EXPECT_EQ(a.wheels.speed_update_iterations, b.wheels.speed_update_iterations);
   EXPECT_EQ(a.steering.angle_sigma_rad, b.steering.angle_sigma_rad);
   EXPECT_EQ(a.steering.gate_probability, b.steering.gate_probability);
   EXPECT_EQ(a.vio.position_m, b.vio.position_m);
@@ -199,6 +204,22 @@ TEST(FilterConfig, RoughCanopyFileDiffersInTheRangeSigma) {
   EXPECT_EQ(FilterConfig{}.map_aided.range_sigma_m, 0.003);  // the default: the echoes' own noise
 }
 
+TEST(FilterConfig, CanopyGnssFileDiffersInTheGnssBiasTheRadiusPriorAndTheIteratedWheels) {
+  // An SBAS receiver under canopy and wheels without torque sensors (docs/localization-filter.md
+  // §5.9): GNSS-bias states, radii that share the terrain's steady slip in their prior, and the
+  // iterated wheel-speed update.
+  FilterConfig expected;
+  expected.name = "canopy-gnss";
+  expected.gps.estimate_bias = true;
+  expected.gps.bias_sigma_m = 0.2;
+  expected.slip_aware_odometry.rolling_radius_prior_wheel_correlation = 0.99;
+  expected.wheels.speed_update_iterations = 3;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("canopy-gnss")), expected);
+  EXPECT_FALSE(FilterConfig{}.gps.estimate_bias);  // the default: every other vehicle as before
+  EXPECT_EQ(FilterConfig{}.slip_aware_odometry.rolling_radius_prior_wheel_correlation, 0.0);
+  EXPECT_EQ(FilterConfig{}.wheels.speed_update_iterations, 1);
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;
@@ -218,7 +239,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 64u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 69u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -314,6 +335,7 @@ const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_wheel_correlation",
                                           "slip_aware_odometry.rolling_radius_noise_wheel_correlation",
+                                          "slip_aware_odometry.rolling_radius_prior_wheel_correlation",
                                           "slip_aware_odometry.torque_sigma_nm",
                                           "slip_aware_odometry.carried_rolling_radius_change_sigma_m",
                                           "slip_aware_odometry.carried_slip_compliance_change_sigma"};
@@ -323,6 +345,7 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   for (const auto& [path, pointer] : Leaves(base)) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
     if (kMayBeZero.contains(path)) continue;  // below
+    if (path == "wheels.speed_update_iterations") continue;  // a count (SpeedUpdateIterationsAreACount)
     const bool probability = path.ends_with("gate_probability") || path == "slip_aware_odometry.max_model_slip";
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
@@ -331,6 +354,25 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
                                          HasSubstr(probability ? "must be in (0, 1)" : "must be finite and > 0")))
           << path << " = " << bad;
     }
+  }
+}
+
+TEST(FilterConfig, SpeedUpdateIterationsAreACount) {
+  json edited = DefaultJson();
+  edited["wheels"]["speed_update_iterations"] = 3;
+  EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").wheels.speed_update_iterations, 3);
+  for (const json& bad : {json(0), json(11), json(-1)}) {
+    edited["wheels"]["speed_update_iterations"] = bad;
+    EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: wheels.speed_update_iterations: must be in [1, 10]")) << bad;
+  }
+  for (const json& bad : {json(2.5), json("3")}) {
+    edited["wheels"]["speed_update_iterations"] = bad;
+    EXPECT_THAT(ErrorOf(edited), HasSubstr("wheels.speed_update_iterations: must be an integer")) << bad;
+  }
+  FilterConfig config;
+  for (const int bad : {0, 11}) {
+    config.wheels.speed_update_iterations = bad;
+    EXPECT_EQ(FilterConfigProblem(config), "wheels.speed_update_iterations must be from 1 to 10");
   }
 }
 
@@ -361,13 +403,15 @@ TEST(FilterConfig, ZeroIsValidWhereItMeansNoneButNegativeIsNot) {
 }
 
 TEST(FilterConfig, WheelCorrelationsAreBelowOne) {
-  for (const std::string key : {"slip_compliance_wheel_correlation", "rolling_radius_noise_wheel_correlation"}) {
+  for (const std::string key : {"slip_compliance_wheel_correlation", "rolling_radius_noise_wheel_correlation",
+                                "rolling_radius_prior_wheel_correlation"}) {
     json edited = DefaultJson();
     edited["slip_aware_odometry"][key] = 0.999;
     const SlipAwareOdometryConfig parsed = ParseFilterConfig(edited.dump(), "edited.json").slip_aware_odometry;
-    EXPECT_EQ(key == "slip_compliance_wheel_correlation" ? parsed.slip_compliance_wheel_correlation
-                                                         : parsed.rolling_radius_noise_wheel_correlation,
-              0.999);
+    const double value = key == "slip_compliance_wheel_correlation"        ? parsed.slip_compliance_wheel_correlation
+                         : key == "rolling_radius_noise_wheel_correlation" ? parsed.rolling_radius_noise_wheel_correlation
+                                                                           : parsed.rolling_radius_prior_wheel_correlation;
+    EXPECT_EQ(value, 0.999) << key;
     for (const double bad : {1.0, 1.5, -0.5}) {
       edited["slip_aware_odometry"][key] = bad;
       EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry." + key + " must be in [0, 1)")) << key << " " << bad;
@@ -429,6 +473,8 @@ TEST(FilterConfig, ProblemOfInCodeConfigsNamesTheField) {
       {"wheels.angle_sigma_rad", [](FilterConfig& c, double v) { c.wheels.angle_sigma_rad = v; }},
       {"initialisation.heading_baseline_m", [](FilterConfig& c, double v) { c.initialisation.heading_baseline_m = v; }},
       {"gps.sigma_floor_sbas_m", [](FilterConfig& c, double v) { c.gps.sigma_floor_sbas_m = v; }},
+      {"gps.bias_sigma_m", [](FilterConfig& c, double v) { c.gps.bias_sigma_m = v; }},
+      {"gps.bias_time_constant_s", [](FilterConfig& c, double v) { c.gps.bias_time_constant_s = v; }},
       {"imu.gyro_sigma_radps", [](FilterConfig& c, double v) { c.imu.gyro_sigma_radps = v; }},
       {"wheels.speed_sigma_radps", [](FilterConfig& c, double v) { c.wheels.speed_sigma_radps = v; }},
       {"wheels.lateral_velocity_sigma_mps", [](FilterConfig& c, double v) { c.wheels.lateral_velocity_sigma_mps = v; }},

@@ -98,6 +98,18 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
           EXPECT_NEAR(with.predicted(1) - without.predicted(1), -0.2, 1e-12);
           EXPECT_EQ(with.predicted(2), without.predicted(2));
         }
+        {  // with the GNSS-bias states appended (StateLayout::For(..., gnss_bias = true))
+          const StateLayout biased = StateLayout::For(vehicle, slip, false, false, false, true);
+          ASSERT_EQ(biased.gnss_bias, layout.size);
+          Eigen::VectorXd xb(biased.size);
+          xb << x, 0.7, -1.1;
+          ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return GpsAntennaModel(s, arm, biased.gnss_bias); },
+                                       xb, "gps bias");
+          const LinearizedMeasurement with = GpsAntennaModel(xb, arm, biased.gnss_bias);
+          const LinearizedMeasurement without = GpsAntennaModel(x, arm);
+          EXPECT_NEAR(with.predicted(0) - without.predicted(0), 0.7, 1e-12);
+          EXPECT_NEAR(with.predicted(1) - without.predicted(1), -1.1, 1e-12);
+        }
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return VioModel(s, arm); }, x, "vio");
         ExpectJacobianMatchesNumeric(
             [&](const Eigen::VectorXd& s) { return WheelSpeedModel(s, vehicle, layout, std::nullopt); }, x, "wheels");
@@ -217,8 +229,10 @@ TEST(MeasurementModels, OutParameterFormsOverwriteAReusedBuffer) {
     EXPECT_TRUE(same(out, WheelSpeedModel(x, v, layout, torque, 0.02))) << v.name;
     WheelLateralVelocityModel(x, v, layout, out);
     EXPECT_TRUE(same(out, WheelLateralVelocityModel(x, v, layout))) << v.name;
-    GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2), out);
+    GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2), -1, out);
     EXPECT_TRUE(same(out, GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2)))) << v.name;
+    GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2), layout.accel_bias, out);  // any pair of states as the bias
+    EXPECT_TRUE(same(out, GpsAntennaModel(x, Eigen::Vector2d(0.3, -0.2), layout.accel_bias))) << v.name;
     ImuModel(x, Eigen::Vector2d(0.1, 0.05), layout.accel_bias, out);
     EXPECT_TRUE(same(out, ImuModel(x, Eigen::Vector2d(0.1, 0.05), layout.accel_bias))) << v.name;
     VioModel(x, Eigen::Vector2d(0.4, 0.0), out);

@@ -279,6 +279,73 @@ TEST(PredictStep, AccelerometerBiasIsARandomWalkInTime) {
   }
 }
 
+TEST(PredictStep, GnssBiasIsAnExactGaussMarkovProcess) {
+  FilterConfig config;
+  config.gps.estimate_bias = true;
+  config.gps.bias_sigma_m = 0.3;
+  config.gps.bias_time_constant_s = 4.0;
+  const double s2 = 0.09, tau = 4.0;
+  std::mt19937_64 spd_rng(44);
+  for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
+    SCOPED_TRACE(vehicle.name);
+    const StateLayout layout = StateLayout::For(vehicle, true, true, false, false, true);
+    const int b = layout.gnss_bias;
+    ASSERT_EQ(b, layout.size - 2);
+    // The mean decays by a = exp(-dt / tau); the rest of the state moves as without the bias.
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(L::kVx) = 1.0;
+    x(b) = 0.8;
+    x(b + 1) = -0.4;
+    Eigen::VectorXd x_without = x.head(b);
+    Eigen::MatrixXd p0 = test::RandomSpd(layout.size, spd_rng, 0.1);
+    p0 = (0.5 * (p0 + p0.transpose())).eval();
+    Eigen::MatrixXd p = p0, p_without = p0.topLeftCorner(b, b);
+    const StateLayout plain = StateLayout::For(vehicle, true, true);
+    PredictStep(vehicle, layout, config, x, p, 0.02);
+    PredictStep(vehicle, plain, config, x_without, p_without, 0.02);
+    const double a = std::exp(-0.02 / tau);
+    EXPECT_DOUBLE_EQ(GnssBiasDecay(layout, config.gps, 0.02), a);
+    EXPECT_DOUBLE_EQ(GnssBiasDecay(plain, config.gps, 0.02), 1.0);
+    EXPECT_NEAR(x(b), 0.8 * a, 1e-15);
+    EXPECT_NEAR(x(b + 1), -0.4 * a, 1e-15);
+    EXPECT_EQ(x.head(b), x_without);
+    EXPECT_EQ(p.topLeftCorner(b, b), p_without);
+    // Its rows of P are scaled by a (F is diagonal there), its own block by a^2 plus Q_b; the
+    // augmented states' rows (F the identity) show the scaling alone.
+    EXPECT_NEAR(p(b, b), a * a * p0(b, b) + s2 * (1.0 - a * a), 1e-14 * p0.norm());
+    EXPECT_NEAR(p(b, b + 1), a * a * p0(b, b + 1), 1e-14 * p0.norm());
+    EXPECT_NEAR(p(b + 1, b + 1), a * a * p0(b + 1, b + 1) + s2 * (1.0 - a * a), 1e-14 * p0.norm());
+    for (int k = L::kBaseSize; k < b; ++k) EXPECT_NEAR(p(k, b), a * p0(k, b), 1e-14 * p0.norm()) << k;
+    EXPECT_EQ(p, p.transpose());
+  }
+}
+
+TEST(PredictStep, GnssBiasVarianceIsStationaryAndIndependentOfTheStepSplit) {
+  FilterConfig config;
+  config.gps.estimate_bias = true;
+  const double s2 = config.gps.bias_sigma_m * config.gps.bias_sigma_m, tau = config.gps.bias_time_constant_s;
+  const mapio::VehicleConfig vehicle = ShippedVehicles().front();
+  const StateLayout layout = StateLayout::For(vehicle, false, false, false, false, true);
+  const int b = layout.gnss_bias;
+  const auto run = [&](double variance0, double dt, int steps) {
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
+    x(b) = 1.0;
+    Eigen::MatrixXd p = Eigen::MatrixXd::Identity(layout.size, layout.size) * 1e-4;
+    p(b, b) = variance0;
+    for (int k = 0; k < steps; ++k) PredictStep(vehicle, layout, config, x, p, dt);
+    return std::pair{x(b), p(b, b)};
+  };
+  // From the stationary variance it stays there; from zero it follows s^2 (1 - exp(-2 t / tau)),
+  // and the mean exp(-t / tau), whatever the step (the discretization is exact).
+  for (const auto& [dt, steps] : {std::pair{0.02, 500}, std::pair{0.1, 100}, std::pair{10.0, 1}}) {
+    SCOPED_TRACE(dt);
+    EXPECT_NEAR(run(s2, dt, steps).second, s2, 1e-12);
+    const auto [mean, variance] = run(0.0, dt, steps);
+    EXPECT_NEAR(variance, s2 * (1.0 - std::exp(-2.0 * 10.0 / tau)), 1e-12);
+    EXPECT_NEAR(mean, std::exp(-10.0 / tau), 1e-12);
+  }
+}
+
 TEST(PredictStep, SlipStateNoiseGrowsWithTheDistanceRolled) {
   const FilterConfig config;
   const SlipAwareOdometryConfig& s = config.slip_aware_odometry;

@@ -30,13 +30,15 @@ std::vector<Expected> ShippedVehicles() {
 void ExpectUniqueAndContiguous(const StateLayout& layout) {
   std::vector<int> used;
   for (int i = 0; i < L::kBaseSize; ++i) used.push_back(i);
-  for (const auto* indices : {&layout.steering, &layout.rolling_radius, &layout.slip_compliance}) {
+  for (const auto* indices : {&layout.steering, &layout.rolling_radius, &layout.slip_compliance, &layout.wheel_angle,
+                              &layout.traction}) {
     ASSERT_EQ(indices->size(), layout.wheel_count());
     for (int index : *indices) {
       if (index >= 0) used.push_back(index);
     }
   }
   if (layout.accel_bias >= 0) used.insert(used.end(), {layout.accel_bias, layout.accel_bias + 1});
+  if (layout.gnss_bias >= 0) used.insert(used.end(), {layout.gnss_bias, layout.gnss_bias + 1});
   std::sort(used.begin(), used.end());
   ASSERT_EQ(used.size(), static_cast<std::size_t>(layout.size));
   for (std::size_t i = 0; i < used.size(); ++i) EXPECT_EQ(used[i], static_cast<int>(i));
@@ -105,6 +107,26 @@ TEST(StateLayout, IndicesAreUniqueAndContiguous) {
         if (slip) {
           EXPECT_EQ(layout.slip_compliance[i], layout.rolling_radius[i] + 1) << i;
         }
+      }
+    }
+  }
+}
+
+TEST(StateLayout, EveryCombinationOfOptionsIsContiguousAndTheGnssBiasComesLast) {
+  for (const Expected& e : ShippedVehicles()) {
+    for (int options = 0; options < 32; ++options) {
+      const bool slip = options & 1, accel = options & 2, angles = options & 4, traction = options & 8,
+                 gnss = options & 16;
+      SCOPED_TRACE(e.vehicle.name + " options " + std::to_string(options));
+      const StateLayout layout = StateLayout::For(e.vehicle, slip, accel, angles, traction, gnss);
+      ExpectUniqueAndContiguous(layout);
+      const StateLayout without = StateLayout::For(e.vehicle, slip, accel, angles, traction);
+      EXPECT_EQ(layout.gnss_bias, gnss ? without.size : -1);
+      EXPECT_EQ(layout.size, without.size + (gnss ? 2 : 0));
+      const std::vector<std::string> names = layout.Names(e.vehicle);
+      if (gnss) {
+        EXPECT_EQ(names[static_cast<std::size_t>(layout.gnss_bias)], "gnss_bias_east_m");
+        EXPECT_EQ(names.back(), "gnss_bias_north_m");
       }
     }
   }

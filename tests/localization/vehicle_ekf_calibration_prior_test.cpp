@@ -51,11 +51,13 @@ TEST(VehicleEkfCalibrationPrior, ReplacesTheFilterFilesPriorAtInitialisation) {
 }
 
 // slip_aware_odometry.carried_*_change_sigma*: what may have changed since the previous drive
-// widens the carried sigmas in quadrature; the kappas keep the file's correlation at the wider sigma.
+// widens the carried sigmas in quadrature; the kappas and radii keep the file's correlations at the
+// wider sigmas.
 TEST(VehicleEkfCalibrationPrior, TheChangeBetweenDrivesWidensTheCarriedSigmas) {
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
   FilterConfig config;
   config.slip_aware_odometry.slip_compliance_wheel_correlation = 0.9;
+  config.slip_aware_odometry.rolling_radius_prior_wheel_correlation = 0.8;
   config.slip_aware_odometry.carried_rolling_radius_change_sigma_m = 1.2e-3;
   config.slip_aware_odometry.carried_slip_compliance_change_sigma = 0.3;
   VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
@@ -73,6 +75,7 @@ TEST(VehicleEkfCalibrationPrior, TheChangeBetweenDrivesWidensTheCarriedSigmas) {
     for (std::size_t j = 0; j < v.wheels.size(); ++j) {
       if (i != j) {
         EXPECT_NEAR(ekf.covariance()(l.slip_compliance[i], l.slip_compliance[j]), 0.9 * kappa_variance, 1e-15);
+        EXPECT_NEAR(ekf.covariance()(l.rolling_radius[i], l.rolling_radius[j]), 0.8 * radius_variance, 1e-18);
       }
     }
   }

@@ -422,19 +422,28 @@ TEST(VehicleEkfWheels, SlipComplianceStaysInItsDomain) {
   EXPECT_TRUE(ekf.covariance().allFinite());
 }
 
-// slip_compliance_wheel_correlation: the initial kappas of two wheels have covariance rho sigma^2.
-TEST(VehicleEkfWheels, InitialSlipCompliancesAreCorrelated) {
+// slip_compliance_wheel_correlation and rolling_radius_prior_wheel_correlation: the initial kappas
+// (radii) of two wheels have covariance rho sigma^2, each with its own rho.
+TEST(VehicleEkfWheels, InitialSlipCompliancesAndRadiiAreCorrelated) {
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
-  for (const double rho : {0.0, 0.9}) {
+  for (const auto& [rho, rho_radius] : {std::pair{0.0, 0.0}, std::pair{0.9, 0.0}, std::pair{0.0, 0.99}}) {
     FilterConfig config;
     config.slip_aware_odometry.slip_compliance_wheel_correlation = rho;
+    config.slip_aware_odometry.rolling_radius_prior_wheel_correlation = rho_radius;
     VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
     ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
     const StateLayout& layout = ekf.layout();
     const double variance = config.slip_aware_odometry.slip_compliance_sigma * config.slip_aware_odometry.slip_compliance_sigma;
-    for (const int a : layout.slip_compliance) {
-      for (const int b : layout.slip_compliance) {
+    const double radius_variance =
+        config.slip_aware_odometry.rolling_radius_sigma_m * config.slip_aware_odometry.rolling_radius_sigma_m;
+    for (std::size_t i = 0; i < v.wheels.size(); ++i) {
+      for (std::size_t j = 0; j < v.wheels.size(); ++j) {
+        const int a = layout.slip_compliance[i], b = layout.slip_compliance[j];
         EXPECT_DOUBLE_EQ(ekf.covariance()(a, b), a == b ? variance : rho * variance) << rho;
+        const int ra = layout.rolling_radius[i], rb = layout.rolling_radius[j];
+        EXPECT_DOUBLE_EQ(ekf.covariance()(ra, rb), ra == rb ? radius_variance : rho_radius * radius_variance)
+            << rho_radius;
+        EXPECT_EQ(ekf.covariance()(a, rb), 0.0);  // kappas and radii stay independent
       }
     }
     EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance().bottomRightCorner(layout.size - 3, layout.size - 3)).info(),

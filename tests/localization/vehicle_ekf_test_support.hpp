@@ -47,7 +47,7 @@ std::vector<std::string> WheelNames(const VehicleConfig& v) {
   return names;
 }
 
-VehicleEkf MakeEkf(const VehicleConfig& v, bool slip_aware = false) {
+[[maybe_unused]] VehicleEkf MakeEkf(const VehicleConfig& v, bool slip_aware = false) {
   FilterConfig config;
   config.slip_aware_odometry.enabled = slip_aware;
   return VehicleEkf(v, config, kOrigin, WheelNames(v));

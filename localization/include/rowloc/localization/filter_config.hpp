@@ -63,6 +63,11 @@ struct SlipAwareOdometryConfig {
   /// terrain's sinkage) changes every wheel's alike; only the difference of two radii turns the
   /// vehicle, and it has (1 - rho) times the walk of independent ones (docs/localization-filter.md §5.6).
   double rolling_radius_noise_wheel_correlation = 0.0;
+  /// Correlation rho in [0, 1) of two wheels' R_w in their initial covariance. With independent
+  /// priors the wheel speeds pin the radii's differences at once and leave their common part with
+  /// sigma / sqrt(wheels): a common error of the prior (the steady slip of the terrain, which R_w
+  /// absorbs without a torque sensor) is then several sigma off (docs/localization-filter.md §5.9).
+  double rolling_radius_prior_wheel_correlation = 0.0;
   /// Wheels messages without torques: the traction coefficient from the acceleration state
   /// (measurement_models.hpp) instead of 0.
   bool traction_from_acceleration = true;
@@ -110,6 +115,13 @@ struct GpsNoise {
   /// When every fix for longer than this (s) was gated out, the filter has drifted (not the receiver):
   /// the next fix re-acquires, P's position block is inflated by y y^T and the fix applied ungated.
   double reacquire_after_s = 10.0;
+  /// Estimate the slowly varying part of the fix error (multipath under canopy) as two states, a
+  /// first-order Gauss-Markov process per axis: b' = -b / tau + w, stationary sigma bias_sigma_m,
+  /// correlation exp(-|dt| / tau) (process_model.hpp). Off: the fix error is taken as white, which a
+  /// multipath offset held for seconds is not (the filter becomes overconfident under canopy).
+  bool estimate_bias = false;
+  double bias_sigma_m = 0.4;          ///< stationary 1-sigma per horizontal axis, > 0
+  double bias_time_constant_s = 5.0;  ///< tau, > 0
 };
 
 struct ImuNoise {
@@ -150,6 +162,12 @@ struct WheelNoise {
   /// angles re-anchored: precise angles linearized far from the truth can drive the filter away
   /// (docs/localization-filter.md §5.7).
   double angle_max_prediction_sigma_rad = 6.14e-3;
+  /// Gauss-Newton iterations of the wheel-speed update, 1 to 10 (1: the EKF update). The speed
+  /// omega = v / (R_w (1 - kappa mu)) is a ratio: one linearized update leaves a residual of the
+  /// order of the innovation squared, always of one sign, which moves v and R_w together along
+  /// their unobservable direction (docs/localization-filter.md §5.9). Each further iteration
+  /// re-linearizes at the updated state (the iterated EKF, Bell & Cathey 1993; Särkkä 2013 §5.4).
+  int speed_update_iterations = 1;
 };
 
 struct SteeringNoise {

@@ -3,7 +3,8 @@
 // x is laid out by StateLayout; R(phi) is the planar rotation by the heading; l a lever arm
 // (body frame, metres); r the yaw rate.
 //
-// GPS antenna (position, local ENU):  h = [X, Y] + R(phi) l_gnss
+// GPS antenna (position, local ENU):  h = [X, Y] + R(phi) l_gnss (+ [b_E, b_N], the GNSS bias
+//   states when the layout has them, process_model.hpp)
 // IMU (specific force at the IMU, yaw rate), l = l_imu:
 //   h = [ax - r^2 l_x, ay - r^2 l_y, r + b_g]
 //   (the centripetal term of a rigid body; the tangential term r' x l is not modelled since r' is
@@ -58,8 +59,11 @@ struct LinearizedMeasurement {
 // resizing it only when the sizes change, so that a filter reusing `out` allocates nothing per
 // message (VehicleEkf does). On an exception `out` is unspecified.
 
-LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m);
-void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, LinearizedMeasurement& out);
+/// gnss_bias_index: StateLayout::gnss_bias (b_E, b_N added to the antenna position), or -1.
+LinearizedMeasurement GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m,
+                                      int gnss_bias_index = -1);
+void GpsAntennaModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int gnss_bias_index,
+                     LinearizedMeasurement& out);
 
 /// accel_bias_index: StateLayout::accel_bias (b_ax, b_ay added to the specific force), or -1.
 LinearizedMeasurement ImuModel(const Eigen::VectorXd& x, const Eigen::Vector2d& lever_arm_m, int accel_bias_index = -1);

@@ -19,8 +19,14 @@
 // kappas of wheels i != j sharing rho q_k^2 sqrt(d_i d_j) (slip_compliance_wheel_correlation rho: one
 // terrain under all wheels). The wheel-angle states, when the layout has them, are propagated by
 // wheel_angle_model.hpp before this step.
-// F is the identity outside the 9 base states and sparse inside them (15 off-diagonal entries):
-// P <- F P F^T is computed as column then row operations on the coupled states only, O(nnz n).
+// GNSS bias (gps.estimate_bias), per horizontal axis a first-order Gauss-Markov process
+// b' = -b / tau + w (Gelb, "Applied Optimal Estimation", 1974, table 3.8-1; Brown & Hwang,
+// "Introduction to Random Signals and Applied Kalman Filtering", 4th ed., §2.9), discretized
+// exactly: b <- a b with a = exp(-dt / tau), Q_b = sigma_b^2 (1 - a^2), so that a stationary
+// variance sigma_b^2 stays sigma_b^2 and the autocorrelation is sigma_b^2 exp(-|t| / tau).
+// F is the identity outside the 9 base states and the GNSS bias, and sparse inside the base states
+// (15 off-diagonal entries): P <- F P F^T is computed as column then row operations on the coupled
+// states only, O(nnz n); the bias rows and columns of P are scaled by a.
 #pragma once
 
 #include "rowloc/localization/filter_config.hpp"
@@ -36,6 +42,9 @@ using BaseJacobian = Eigen::Matrix<double, StateLayout::kBaseSize, StateLayout::
 /// One step of the noise-free model: state <- f(state, dt); returns F restricted to the base states
 /// (F is the identity elsewhere). dt >= 0, finite (checked by the caller).
 BaseJacobian PropagateState(Eigen::VectorXd& state, double dt_s);
+
+/// a = exp(-dt / tau), the GNSS bias's factor over one step (1 without bias states).
+double GnssBiasDecay(const StateLayout& layout, const GpsNoise& gps, double dt_s);
 
 /// The full prediction step: propagates state and covariance by dt_s (one step, no splitting) and
 /// adds the process noise. The heading is wrapped. base_jacobian: if given, receives F restricted to

@@ -20,6 +20,9 @@
 //   wheel's cumulative rotation (wheel_angle_model.hpp)
 //   then, with traction states (slip-aware odometry with a torque noise), per wheel in config
 //   order: mu_<wheel>, the traction coefficient T / (N r) that the torques measure
+//   then, with GNSS-bias estimation: gnss_bias_east_m, gnss_bias_north_m (m), the slowly varying
+//   part of the receiver's position error (multipath under canopy), a first-order Gauss-Markov
+//   process (process_model.hpp)
 // Seed 000 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
 // gyro bias is moved before the steering angles here so that the base block has the same indices
 // for every vehicle kind (a swerve robot has 3 steering states, a 4WS vehicle 4, the others none).
@@ -44,14 +47,16 @@ struct StateLayout {
   int accel_bias = -1;              ///< index of b_ax (b_ay follows), or -1 (not estimated)
   std::vector<int> wheel_angle;     ///< per wheel: index of theta, or -1 (no wheel-angle measurement)
   std::vector<int> traction;        ///< per wheel: index of mu, or -1 (torques taken as exact)
+  int gnss_bias = -1;               ///< index of the east GNSS bias (north follows), or -1 (not estimated)
   int size = kBaseSize;
 
   /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
   /// a rolling radius and a slip compliance per wheel (or track).
   /// With accel_bias, two accelerometer-bias states; then with wheel_angles one angle per wheel;
-  /// then, with traction and slip_aware_odometry, one traction coefficient per wheel.
+  /// then, with traction and slip_aware_odometry, one traction coefficient per wheel; then, with
+  /// gnss_bias, the two GNSS-bias states.
   static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false,
-                         bool wheel_angles = false, bool traction = false);
+                         bool wheel_angles = false, bool traction = false, bool gnss_bias = false);
 
   /// Names of the states in index order, e.g. "x_m", "delta_front", "R_rear_left" (for messages).
   std::vector<std::string> Names(const mapio::VehicleConfig& vehicle) const;

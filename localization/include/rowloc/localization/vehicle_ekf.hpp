@@ -183,6 +183,8 @@ class VehicleEkf {
   /// (the vehicle is at rest; nothing else done) or when a predicted angle's sigma exceeds
   /// wheels.angle_max_prediction_sigma_rad (the angles re-anchored).
   bool ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result);
+  /// The iterations after the first of the wheel-speed update (wheels.speed_update_iterations).
+  void IterateWheelSpeedUpdate(const VectorRef& measured_radps);
   /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
   /// beyond the gate re-anchors them to the torques instead.
   void ApplyTorques(double time_s, ProcessResult& result);
@@ -199,7 +201,9 @@ class VehicleEkf {
   /// (the message's index in the log header, usually the vehicle's order) is tried first.
   std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
   std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
-  void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance);
+  /// position_from_gnss: the pose's position is a fix's, so it carries the GNSS bias (if estimated).
+  void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
+                       bool position_from_gnss = false);
   /// Keeps the states in their domains: steering angles wrapped to (-pi, pi]; R_w within
   /// [0.5, 1.5] x nominal; the slip compliance kappa >= 0 and, for a traction coefficient mu > 0,
   /// kappa mu <= max_model_slip (so that 1 - kappa mu > 0). mu: the last wheels message's torques;
@@ -252,6 +256,9 @@ class VehicleEkf {
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
     std::vector<double> steered_angles;       ///< their angles
     std::vector<double> max_slip_compliance;  ///< ProjectStates: max_model_slip / mu per wheel
+    Eigen::VectorXd prior_state;              ///< the iterated wheel-speed update: x0, P0, x0 - x_i
+    Eigen::MatrixXd prior_covariance;
+    Eigen::VectorXd step;
   };
   UpdateBuffers update_buffers_;
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
