@@ -1,7 +1,7 @@
 // VehicleEkf with the GNSS-bias states (gps.estimate_bias; state_layout.hpp, process_model.hpp):
 // the initial correlation of a position taken from a fix, the consistency of the position when the
 // fixes carry a Gauss-Markov error (with and without the bias states), SetPose leaving the bias
-// alone, and the smoother recording the bias's transition.
+// alone, and the smoother recording the bias's transition and the iterated wheel update.
 #include "vehicle_ekf_test_support.hpp"
 
 namespace rowloc::localization {
@@ -124,28 +124,35 @@ TEST(VehicleEkfGnssBias, SetPoseLeavesTheBiasButNotItsCorrelationWithThePose) {
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(ekf.covariance()).info(), Eigen::Success);
 }
 
-TEST(VehicleEkfGnssBias, TheSmootherRecordsTheBiasDecay) {
+TEST(VehicleEkfGnssBias, TheSmootherRecordsTheBiasDecayAndTheIteratedWheelUpdate) {
   // A transition the filter made without recording it shows as negative implied process noise
-  // (fixed_interval_smoother.hpp); the bias decays at every prediction step.
+  // (fixed_interval_smoother.hpp); the bias decays at every prediction step. The iterated wheel
+  // update (canopy-gnss.json's other part) restarts from the prior inside one node.
   const VehicleConfig v = mapio::VineyardUgv4wsConfig();
-  VehicleEkf ekf(v, BiasConfig(true), kOrigin, WheelNames(v));
-  Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, {{10.0, 1.0, 0.0, 0.0}, {10.0, 1.0, 0.0, 0.2}});
-  AddGaussMarkovFixErrors(v, d, 3, 0.3);
-  ekf.EnableSmoothing(/*check_transitions=*/true);
-  double next_mark_s = 0.0;
-  for (const SensorMessage& m : d.messages) {
-    ekf.Process(m);
-    if (ekf.initialised() && ekf.time_s() >= next_mark_s) {
-      ekf.MarkForSmoothing();
-      next_mark_s = ekf.time_s() + 0.5;
+  for (const int iterations : {1, 3}) {
+    SCOPED_TRACE(iterations);
+    FilterConfig config = BiasConfig(true);
+    config.wheels.speed_update_iterations = iterations;
+    config.slip_aware_odometry.rolling_radius_prior_wheel_correlation = 0.99;
+    VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
+    Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, {{10.0, 1.0, 0.0, 0.0}, {10.0, 1.0, 0.0, 0.2}});
+    AddGaussMarkovFixErrors(v, d, 3, 0.3);
+    ekf.EnableSmoothing(/*check_transitions=*/true);
+    double next_mark_s = 0.0;
+    for (const SensorMessage& m : d.messages) {
+      ekf.Process(m);
+      if (ekf.initialised() && ekf.time_s() >= next_mark_s) {
+        ekf.MarkForSmoothing();
+        next_mark_s = ekf.time_s() + 0.5;
+      }
     }
-  }
-  EXPECT_GT(ekf.smoother()->min_relative_process_noise(), -1e-9);
-  const std::vector<SmoothedState> smoothed = ekf.FinishSmoothing();
-  ASSERT_GT(smoothed.size(), 30u);
-  for (const SmoothedState& s : smoothed) {
-    EXPECT_TRUE(s.state.allFinite());
-    EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(s.covariance).info(), Eigen::Success);
+    EXPECT_GT(ekf.smoother()->min_relative_process_noise(), -1e-9);
+    const std::vector<SmoothedState> smoothed = ekf.FinishSmoothing();
+    ASSERT_GT(smoothed.size(), 30u);
+    for (const SmoothedState& s : smoothed) {
+      EXPECT_TRUE(s.state.allFinite());
+      EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(s.covariance).info(), Eigen::Success);
+    }
   }
 }
 
