@@ -1,7 +1,7 @@
 // The iterated wheel-speed update (wheels.speed_update_iterations; filter_config.hpp;
 // docs/localization-filter.md §5.9): it reaches the Gauss-Newton fixed point of the update, which
-// the one-step EKF update of the ratio omega = v / (R_w (1 - kappa mu)) does not, and one iteration
-// is the EKF update bit for bit.
+// the one-step EKF update of the ratio omega = v / (R_w (1 - kappa mu)) does not, and changes the
+// track little where the linearization is good.
 #include "vehicle_ekf_test_support.hpp"
 
 namespace rowloc::localization {
@@ -73,25 +73,27 @@ TEST(VehicleEkfIteratedWheels, IterationsConvergeToTheGaussNewtonFixedPoint) {
   }
 }
 
-TEST(VehicleEkfIteratedWheels, OneIterationIsTheEkfUpdate) {
-  // speed_update_iterations = 1 takes no other path: the same bits as the default filter.
+TEST(VehicleEkfIteratedWheels, OnNearExactReadingsTheIterationsChangeTheTrackByMillimetres) {
+  // Where the linearization is good (1 cm fixes, small innovations) the iterations change little:
+  // the same drive ends elsewhere, but within 5 mm of the EKF's track.
   const VehicleConfig v = mapio::VineyardUgv4wsConfig();
   FilterConfig config;
+  ASSERT_EQ(config.wheels.speed_update_iterations, 1);  // the default is the EKF update
   const Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, StraightThenCircle(), 0.0, 4);
-  VehicleEkf a(v, config, kOrigin, WheelNames(v));
-  config.wheels.speed_update_iterations = 1;
-  VehicleEkf b(v, config, kOrigin, WheelNames(v));
-  for (const SensorMessage& m : d.messages) {
-    a.Process(m);
-    b.Process(m);
-  }
-  EXPECT_TRUE(BitIdentical(Snap(a), Snap(b)));
-  // Iterated, the same drive (near-exact readings, 1 cm fixes) ends elsewhere, within millimetres.
+  VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
   config.wheels.speed_update_iterations = 3;
-  VehicleEkf c(v, config, kOrigin, WheelNames(v));
-  for (const SensorMessage& m : d.messages) c.Process(m);
-  EXPECT_FALSE(BitIdentical(Snap(a), Snap(c)));
-  EXPECT_LT((c.state().head<2>() - a.state().head<2>()).norm(), 0.005);
+  VehicleEkf iterated(v, config, kOrigin, WheelNames(v));
+  double max_difference_m = 0.0;
+  for (const SensorMessage& m : d.messages) {
+    ekf.Process(m);
+    iterated.Process(m);
+    if (ekf.initialised()) {
+      max_difference_m = std::max(max_difference_m, (iterated.state().head<2>() - ekf.state().head<2>()).norm());
+    }
+  }
+  EXPECT_GT(max_difference_m, 0.0);
+  EXPECT_LT(max_difference_m, 0.005);
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(iterated.covariance()).info(), Eigen::Success);
 }
 
 }  // namespace
