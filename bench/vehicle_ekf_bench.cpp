@@ -9,6 +9,7 @@
 // restores x and P first (the copy is timed too; BM_RestoreStateAndCovariance is that copy alone).
 // Run the Release build with
 //   vehicle_ekf_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/process_model.hpp"
@@ -18,6 +19,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <optional>
 #include <random>
@@ -180,12 +182,8 @@ void BM_CycleTracked(benchmark::State& state) { RunCycles(state, rowloc::mapio::
 /// radius priors, three iterations of the wheel-speed update) against BM_Cycle4wsSlipAware.
 void BM_Cycle4wsSlipAware(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), true); }
 void BM_Cycle4wsCanopyGnss(benchmark::State& state) {
-  loc::FilterConfig config = Converged::Config(true);
-  config.gps.estimate_bias = true;
-  config.gps.bias_sigma_m = 0.2;
-  config.slip_aware_odometry.rolling_radius_prior_wheel_correlation = 0.99;
-  config.wheels.speed_update_iterations = 3;
-  RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), config);
+  RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(),
+            loc::LoadFilterConfig(std::filesystem::path(ROWLOC_SOURCE_DIR) / "config/filters/canopy-gnss.json"));
 }
 /// Issue 4's cycle with wheel angles instead of speeds (wheels.angle_measurement; slip-aware).
 void BM_CycleDifferentialWheelAngles(benchmark::State& state) {

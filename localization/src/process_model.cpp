@@ -202,14 +202,6 @@ void Congruence(const BaseJacobian& f, Eigen::MatrixXd& p) {
   }
 }
 
-}  // namespace
-
-double GnssBiasDecay(const StateLayout& layout, const GpsNoise& gps, double dt_s) {
-  return layout.gnss_bias >= 0 ? std::exp(-dt_s / gps.bias_time_constant_s) : 1.0;
-}
-
-namespace {
-
 /// The GNSS bias's Gauss-Markov step (header): b <- a b, its rows and columns of P scaled by a (F
 /// is diagonal there and the base step does not touch them), plus Q_b = sigma_b^2 (1 - a^2).
 void PropagateGnssBias(const StateLayout& layout, const GpsNoise& gps, Eigen::VectorXd& x, Eigen::MatrixXd& p,
@@ -225,6 +217,10 @@ void PropagateGnssBias(const StateLayout& layout, const GpsNoise& gps, Eigen::Ve
 }
 
 }  // namespace
+
+double GnssBiasDecay(const StateLayout& layout, const GpsNoise& gps, double dt_s) {
+  return layout.gnss_bias >= 0 ? std::exp(-dt_s / gps.bias_time_constant_s) : 1.0;
+}
 
 void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
                  Eigen::VectorXd& x, Eigen::MatrixXd& p, double dt, BaseJacobian* base_jacobian) {
