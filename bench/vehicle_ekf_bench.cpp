@@ -178,13 +178,17 @@ void BM_CycleSwerveSlipAware(benchmark::State& state) { RunCycles(state, rowloc:
 void BM_Cycle4ws(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), false); }
 void BM_CycleDifferential(benchmark::State& state) { RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), false); }
 void BM_CycleTracked(benchmark::State& state) { RunCycles(state, rowloc::mapio::TrackedVehicleConfig(), false); }
-/// The 4WS UGV with config/filters/canopy-gnss.json (slip-aware, GNSS-bias states, correlated
-/// radius priors, three iterations of the wheel-speed update) against BM_Cycle4wsSlipAware.
 void BM_Cycle4wsSlipAware(benchmark::State& state) { RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(), true); }
-void BM_Cycle4wsCanopyGnss(benchmark::State& state) {
+/// The 4WS UGV with a shipped filter file of config/filters/, against BM_Cycle4wsSlipAware.
+void RunCycles4wsWithFile(benchmark::State& state, const std::string& file_name) {
   RunCycles(state, rowloc::mapio::VineyardUgv4wsConfig(),
-            loc::LoadFilterConfig(std::filesystem::path(ROWLOC_SOURCE_DIR) / "config/filters/canopy-gnss.json"));
+            loc::LoadFilterConfig(std::filesystem::path(ROWLOC_SOURCE_DIR) / "config/filters" / file_name));
 }
+/// canopy-gnss.json: slip-aware, GNSS-bias states, correlated radius priors, three iterations of
+/// the wheel-speed update.
+void BM_Cycle4wsCanopyGnss(benchmark::State& state) { RunCycles4wsWithFile(state, "canopy-gnss.json"); }
+/// canopy-gnss-flat.json: the same without the iterations.
+void BM_Cycle4wsCanopyGnssFlat(benchmark::State& state) { RunCycles4wsWithFile(state, "canopy-gnss-flat.json"); }
 /// Issue 4's cycle with wheel angles instead of speeds (wheels.angle_measurement; slip-aware).
 void BM_CycleDifferentialWheelAngles(benchmark::State& state) {
   RunCycles(state, rowloc::mapio::DifferentialDriveConfig(), true, true, true);
@@ -280,6 +284,7 @@ BENCHMARK(BM_CycleSwerveSlipAware);
 BENCHMARK(BM_Cycle4ws);
 BENCHMARK(BM_Cycle4wsSlipAware);
 BENCHMARK(BM_Cycle4wsCanopyGnss);
+BENCHMARK(BM_Cycle4wsCanopyGnssFlat);
 BENCHMARK(BM_CycleDifferential);
 BENCHMARK(BM_CycleDifferentialSlipAware);
 BENCHMARK(BM_CycleDifferentialWheelAngles);

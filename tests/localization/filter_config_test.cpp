@@ -220,6 +220,20 @@ TEST(FilterConfig, CanopyGnssFileDiffersInTheGnssBiasTheRadiusPriorAndTheIterate
   EXPECT_EQ(FilterConfig{}.wheels.speed_update_iterations, 1);
 }
 
+TEST(FilterConfig, CanopyGnssFlatFileTradesTheIterationsForALowerSpeedNoiseAndAWiderRadiusPrior) {
+  // canopy-gnss.json for flat ground (docs/localization-filter.md §5.10): no iterated update (its
+  // pull on R_w is a counter-bias, §5.9 item 3); a lower velocity noise, which gives the speed
+  // fewer false clues on the radius; a radius prior wide enough for the driven wheels' slip.
+  FilterConfig expected = LoadFilterConfig(FilterFile("canopy-gnss"));
+  expected.name = "canopy-gnss-flat";
+  expected.wheels.speed_update_iterations = 1;
+  expected.process_noise.velocity_mps_per_sqrt_hz = 0.002;
+  expected.slip_aware_odometry.rolling_radius_sigma_m = 0.03;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("canopy-gnss-flat")), expected);
+  EXPECT_EQ(FilterConfig{}.process_noise.velocity_mps_per_sqrt_hz, 0.02);
+  EXPECT_EQ(FilterConfig{}.slip_aware_odometry.rolling_radius_sigma_m, 0.01);
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;

@@ -162,11 +162,12 @@ struct WheelNoise {
   /// angles re-anchored: precise angles linearized far from the truth can drive the filter away
   /// (docs/localization-filter.md §5.7).
   double angle_max_prediction_sigma_rad = 6.14e-3;
-  /// Gauss-Newton iterations of the wheel-speed update, 1 to 10 (1: the EKF update). The speed
-  /// omega = v / (R_w (1 - kappa mu)) is a ratio: one linearized update leaves a residual of the
-  /// order of the innovation squared, always of one sign, which moves v and R_w together along
-  /// their unobservable direction (docs/localization-filter.md §5.9). Each further iteration
-  /// re-linearizes at the updated state (the iterated EKF, Bell & Cathey 1993; Särkkä 2013 §5.4).
+  /// Gauss-Newton iterations of the wheel-speed update, 1 to 10 (1: the EKF update). Each further
+  /// iteration re-linearizes at the updated state (the iterated EKF, Bell & Cathey 1993; Särkkä
+  /// 2013 §5.4), whose fixed point is the mode of the update's posterior. For the ratio
+  /// omega = v / (R_w (1 - kappa mu)) that mode lies towards smaller (v, R_w): the iterations pull
+  /// R_w down, against the walk up that the speed's process noise causes without fixes. A
+  /// counter-bias, not a cure (docs/localization-filter.md §5.9 item 3).
   int speed_update_iterations = 1;
 };
 
