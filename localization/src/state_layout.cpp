@@ -2,8 +2,8 @@
 
 namespace rowloc::localization {
 
-StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias,
-                             bool wheel_angles, bool traction, bool gnss_bias) {
+StateLayout StateLayout::For(const mapio::VehicleConfig& vehicle, const Options& options) {
+  const auto& [slip_aware_odometry, accel_bias, wheel_angles, traction, gnss_bias] = options;
   StateLayout layout;
   const std::size_t n = vehicle.wheels.size();
   layout.steering.assign(n, -1);

@@ -86,8 +86,8 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return GpsAntennaModel(s, arm); }, x, "gps arm");
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, imu); }, x, "imu");
         ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, arm); }, x, "imu arm");
-        {  // with the accelerometer-bias states appended (StateLayout::For(..., true))
-          const StateLayout biased = StateLayout::For(vehicle, slip, true);
+        {  // with the accelerometer-bias states appended (accel_bias)
+          const StateLayout biased = StateLayout::For(vehicle, {.slip_aware_odometry = slip, .accel_bias = true});
           Eigen::VectorXd xb(biased.size);
           xb << x, 0.3, -0.2;
           ExpectJacobianMatchesNumeric([&](const Eigen::VectorXd& s) { return ImuModel(s, arm, biased.accel_bias); }, xb,
@@ -98,8 +98,8 @@ TEST(MeasurementModels, JacobiansMatchCentralDifferencesForEveryVehicle) {
           EXPECT_NEAR(with.predicted(1) - without.predicted(1), -0.2, 1e-12);
           EXPECT_EQ(with.predicted(2), without.predicted(2));
         }
-        {  // with the GNSS-bias states appended (StateLayout::For(..., gnss_bias = true))
-          const StateLayout biased = StateLayout::For(vehicle, slip, false, false, false, true);
+        {  // with the GNSS-bias states appended (gnss_bias)
+          const StateLayout biased = StateLayout::For(vehicle, {.slip_aware_odometry = slip, .gnss_bias = true});
           ASSERT_EQ(biased.gnss_bias, layout.size);
           Eigen::VectorXd xb(biased.size);
           xb << x, 0.7, -1.1;
@@ -144,7 +144,7 @@ TEST(MeasurementModels, WheelJacobianWithTractionStatesMatchesCentralDifferences
   std::uniform_real_distribution<double> mu(-0.3, 0.3);
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
     SCOPED_TRACE(vehicle.name);
-    const StateLayout layout = StateLayout::For(vehicle, true, true, false, true);
+    const StateLayout layout = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .traction = true});
     ASSERT_TRUE(layout.has_traction());
     for (int trial = 0; trial < 20; ++trial) {
       Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
@@ -215,7 +215,7 @@ TEST(MeasurementModels, OutParameterFormsOverwriteAReusedBuffer) {
            (a.jacobian.array() == b.jacobian.array()).all();
   };
   for (const mapio::VehicleConfig& v : ShippedVehicles()) {
-    const StateLayout layout = StateLayout::For(v, true, true);
+    const StateLayout layout = StateLayout::For(v, {.slip_aware_odometry = true, .accel_bias = true});
     const Eigen::VectorXd x = RandomState(layout, rng);
     const std::optional<std::vector<double>> torque = std::vector<double>(v.wheels.size(), 30.0);
     std::vector<std::size_t> steered;

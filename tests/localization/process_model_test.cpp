@@ -264,7 +264,7 @@ TEST(PredictStep, AccelerometerBiasIsARandomWalkInTime) {
   const double q = config.process_noise.accel_bias_mps2_per_sqrt_hz;
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
     SCOPED_TRACE(vehicle.name);
-    const StateLayout layout = StateLayout::For(vehicle, true, true);
+    const StateLayout layout = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true});
     Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);
     x(L::kVx) = 1.0;
     x(layout.accel_bias) = 0.3;
@@ -288,7 +288,7 @@ TEST(PredictStep, GnssBiasIsAnExactGaussMarkovProcess) {
   std::mt19937_64 spd_rng(44);
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
     SCOPED_TRACE(vehicle.name);
-    const StateLayout layout = StateLayout::For(vehicle, true, true, false, false, true);
+    const StateLayout layout = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .gnss_bias = true});
     const int b = layout.gnss_bias;
     ASSERT_EQ(b, layout.size - 2);
     // The mean decays by a = exp(-dt / tau); the rest of the state moves as without the bias.
@@ -300,7 +300,7 @@ TEST(PredictStep, GnssBiasIsAnExactGaussMarkovProcess) {
     Eigen::MatrixXd p0 = test::RandomSpd(layout.size, spd_rng, 0.1);
     p0 = (0.5 * (p0 + p0.transpose())).eval();
     Eigen::MatrixXd p = p0, p_without = p0.topLeftCorner(b, b);
-    const StateLayout plain = StateLayout::For(vehicle, true, true);
+    const StateLayout plain = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true});
     PredictStep(vehicle, layout, config, x, p, 0.02);
     PredictStep(vehicle, plain, config, x_without, p_without, 0.02);
     const double a = std::exp(-0.02 / tau);
@@ -325,7 +325,7 @@ TEST(PredictStep, GnssBiasVarianceIsStationaryAndIndependentOfTheStepSplit) {
   config.gps.estimate_bias = true;
   const double s2 = config.gps.bias_sigma_m * config.gps.bias_sigma_m, tau = config.gps.bias_time_constant_s;
   const mapio::VehicleConfig vehicle = ShippedVehicles().front();
-  const StateLayout layout = StateLayout::For(vehicle, false, false, false, false, true);
+  const StateLayout layout = StateLayout::For(vehicle, {.gnss_bias = true});
   const int b = layout.gnss_bias;
   const auto run = [&](double variance0, double dt, int steps) {
     Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);

@@ -74,7 +74,7 @@ TEST(StateLayout, SizesOfTheShippedVehicles) {
   for (const Expected& e : ShippedVehicles()) {  // the accelerometer bias comes last, after everything
     for (bool slip : {false, true}) {
       const StateLayout without = StateLayout::For(e.vehicle, slip);
-      const StateLayout with = StateLayout::For(e.vehicle, slip, true);
+      const StateLayout with = StateLayout::For(e.vehicle, {.slip_aware_odometry = slip, .accel_bias = true});
       EXPECT_EQ(without.accel_bias, -1);
       EXPECT_EQ(with.accel_bias, without.size);
       EXPECT_EQ(with.size, without.size + 2);
@@ -118,9 +118,12 @@ TEST(StateLayout, EveryCombinationOfOptionsIsContiguousAndTheGnssBiasComesLast) 
       const bool slip = options & 1, accel = options & 2, angles = options & 4, traction = options & 8,
                  gnss = options & 16;
       SCOPED_TRACE(e.vehicle.name + " options " + std::to_string(options));
-      const StateLayout layout = StateLayout::For(e.vehicle, slip, accel, angles, traction, gnss);
+      StateLayout::Options chosen{.slip_aware_odometry = slip, .accel_bias = accel, .wheel_angles = angles,
+                                  .traction = traction, .gnss_bias = gnss};
+      const StateLayout layout = StateLayout::For(e.vehicle, chosen);
       ExpectUniqueAndContiguous(layout);
-      const StateLayout without = StateLayout::For(e.vehicle, slip, accel, angles, traction);
+      chosen.gnss_bias = false;
+      const StateLayout without = StateLayout::For(e.vehicle, chosen);
       EXPECT_EQ(layout.gnss_bias, gnss ? without.size : -1);
       EXPECT_EQ(layout.size, without.size + (gnss ? 2 : 0));
       const std::vector<std::string> names = layout.Names(e.vehicle);

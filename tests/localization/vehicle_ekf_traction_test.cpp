@@ -30,7 +30,7 @@ TEST(VehicleEkfTraction, TheLayoutHasOneTractionStatePerWheelOnlyWithATorqueNois
   for (std::size_t i = 0; i < d.v.wheels.size(); ++i) {
     EXPECT_EQ(names[static_cast<std::size_t>(layout.traction[i])], "mu_" + d.v.wheels[i].name);
   }
-  EXPECT_EQ(layout.size, StateLayout::For(d.v, true, true).size + 2);
+  EXPECT_EQ(layout.size, StateLayout::For(d.v, {.slip_aware_odometry = true, .accel_bias = true}).size + 2);
   EXPECT_FALSE(MakeEkf(d.v, true).layout().has_traction());  // the default: torques taken as exact
   FilterConfig no_slip = TractionConfig();
   no_slip.slip_aware_odometry.enabled = false;  // mu only matters to the slip-aware model

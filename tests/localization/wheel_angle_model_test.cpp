@@ -27,7 +27,7 @@ std::vector<mapio::VehicleConfig> ShippedVehicles() {
 }
 
 StateLayout AngleLayout(const mapio::VehicleConfig& vehicle, bool slip_aware) {
-  return StateLayout::For(vehicle, slip_aware, /*accel_bias=*/true, /*wheel_angles=*/true);
+  return StateLayout::For(vehicle, {.slip_aware_odometry = slip_aware, .accel_bias = true, .wheel_angles = true});
 }
 
 /// A state inside every model's domain: moving forward, nominal radii, kappa mu well below 1.

@@ -50,13 +50,26 @@ struct StateLayout {
   int gnss_bias = -1;               ///< index of the east GNSS bias (north follows), or -1 (not estimated)
   int size = kBaseSize;
 
+  /// Which optional state blocks a layout has (each false by default), e.g.
+  /// StateLayout::For(vehicle, {.slip_aware_odometry = true, .gnss_bias = true}).
+  struct Options {
+    bool slip_aware_odometry = false;  ///< R_w and kappa per wheel (or track)
+    bool accel_bias = false;           ///< b_ax, b_ay
+    bool wheel_angles = false;         ///< theta per wheel
+    bool traction = false;             ///< mu per wheel; only with slip_aware_odometry
+    bool gnss_bias = false;            ///< b_E, b_N
+  };
+
   /// The layout of a vehicle: one steering state per steerable wheel; with slip_aware_odometry
   /// a rolling radius and a slip compliance per wheel (or track).
   /// With accel_bias, two accelerometer-bias states; then with wheel_angles one angle per wheel;
   /// then, with traction and slip_aware_odometry, one traction coefficient per wheel; then, with
   /// gnss_bias, the two GNSS-bias states.
-  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry, bool accel_bias = false,
-                         bool wheel_angles = false, bool traction = false, bool gnss_bias = false);
+  static StateLayout For(const mapio::VehicleConfig& vehicle, const Options& options);
+  /// The layout with only the slip-aware states optional (the other blocks off).
+  static StateLayout For(const mapio::VehicleConfig& vehicle, bool slip_aware_odometry) {
+    return For(vehicle, Options{.slip_aware_odometry = slip_aware_odometry});
+  }
 
   /// Names of the states in index order, e.g. "x_m", "delta_front", "R_rear_left" (for messages).
   std::vector<std::string> Names(const mapio::VehicleConfig& vehicle) const;
