@@ -144,7 +144,8 @@ TEST(MeasurementModels, WheelJacobianWithTractionStatesMatchesCentralDifferences
   std::uniform_real_distribution<double> mu(-0.3, 0.3);
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
     SCOPED_TRACE(vehicle.name);
-    const StateLayout layout = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .traction = true});
+    const StateLayout layout =
+        StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .traction = true});
     ASSERT_TRUE(layout.has_traction());
     for (int trial = 0; trial < 20; ++trial) {
       Eigen::VectorXd x = Eigen::VectorXd::Zero(layout.size);

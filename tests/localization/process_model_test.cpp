@@ -288,7 +288,8 @@ TEST(PredictStep, GnssBiasIsAnExactGaussMarkovProcess) {
   std::mt19937_64 spd_rng(44);
   for (const mapio::VehicleConfig& vehicle : ShippedVehicles()) {
     SCOPED_TRACE(vehicle.name);
-    const StateLayout layout = StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .gnss_bias = true});
+    const StateLayout layout =
+        StateLayout::For(vehicle, {.slip_aware_odometry = true, .accel_bias = true, .gnss_bias = true});
     const int b = layout.gnss_bias;
     ASSERT_EQ(b, layout.size - 2);
     // The mean decays by a = exp(-dt / tau); the rest of the state moves as without the bias.

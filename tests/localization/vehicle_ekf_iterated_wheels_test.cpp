@@ -37,7 +37,8 @@ OneUpdate UpdateFromRest(int iterations, const VehicleConfig& v, FilterConfig& c
 /// How far x is from the iterated EKF's fixed point (the Gauss-Newton condition of the MAP
 /// estimate): x - x0 - K (z - h(x) - H (x0 - x)), with H and K at x; and P against (I - K H) P0.
 std::pair<double, double> FixedPointResidual(const OneUpdate& u, const VehicleConfig& v, const FilterConfig& config) {
-  const StateLayout layout = StateLayout::For(v, {.slip_aware_odometry = true, .accel_bias = config.imu.estimate_accel_bias});
+  const StateLayout layout =
+      StateLayout::For(v, {.slip_aware_odometry = true, .accel_bias = config.imu.estimate_accel_bias});
   const LinearizedMeasurement h = WheelSpeedModel(u.x, v, layout, std::nullopt, 0.0, true);
   const Eigen::MatrixXd s = h.jacobian * u.p0 * h.jacobian.transpose() + u.noise;
   const Eigen::MatrixXd k = u.p0 * h.jacobian.transpose() * s.inverse();
