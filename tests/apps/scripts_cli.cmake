@@ -91,3 +91,6 @@ rowloc_command_test(scripts.ratio_scale_walk_without_speed_noise_stays ON
   ${_walk} --speed-noise 0)
 rowloc_command_test(scripts.ratio_scale_walk_rejects_empty_range OFF "empty seed range: 3-1"
   ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --seeds 3-1)
+rowloc_command_test(scripts.ratio_scale_walk_rejects_a_zero_duration OFF
+  "--duration and --true-radius must be > 0, --speed-noise >= 0"
+  ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --duration 0)
