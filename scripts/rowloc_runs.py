@@ -69,6 +69,14 @@ def sensor_nis(report, sensor):
     return next((s["nis"] for s in report.get("innovations", []) if s["sensor"] == sensor), None)
 
 
+def sensor_whiteness(report, sensor):
+    """The fraction of one sensor's whiteness lags inside their band, or None when it was not computed
+    (no updates, or too few for one lag)."""
+    entry = next((s for s in report.get("innovations", []) if s["sensor"] == sensor), None)
+    whiteness = (entry or {}).get("whiteness") or {}
+    return None if whiteness.get("not_computed") else whiteness.get("fraction_inside")
+
+
 def check_inputs(parser, paths, rowloc):
     for path in paths:
         if not os.path.isfile(path):

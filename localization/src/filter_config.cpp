@@ -77,7 +77,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps},
       {"imu.gate_probability", c.imu.gate_probability, Domain::kProbability},
       {"wheels.speed_sigma_radps", c.wheels.speed_sigma_radps},
-      {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction},
+      {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction, Domain::kNonNegative},
       {"wheels.lateral_velocity_sigma_mps", c.wheels.lateral_velocity_sigma_mps},
       {"wheels.gate_probability", c.wheels.gate_probability, Domain::kProbability},
       {"wheels.max_speed_radps", c.wheels.max_speed_radps},

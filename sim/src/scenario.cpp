@@ -7,7 +7,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <filesystem>
 #include <set>
+#include <string>
+#include <system_error>
 
 namespace rowloc::sim {
 namespace {
@@ -194,6 +197,24 @@ void ReadRouteAndTerrain(Reader& reader, Scenario& scenario) {
   if (const auto problem = RouteSpecProblem(scenario.route)) reader.Fail(reader.Key("route"), *problem);
 }
 
+/// The optional "filters" array: each element a non-empty path of an existing file.
+std::vector<std::filesystem::path> ReadFilterFiles(Reader& reader, const std::filesystem::path& base) {
+  std::vector<std::filesystem::path> files;
+  if (!reader.Has("filters")) return files;
+  const json& array = reader.Array("filters");
+  for (std::size_t i = 0; i < array.size(); ++i) {
+    const std::string key = reader.Key("filters") + "[" + std::to_string(i) + "]";
+    if (!array[i].is_string() || array[i].get<std::string>().empty()) {
+      reader.Fail(key, std::string("must name a filter file, got ") + array[i].dump());
+    }
+    const std::filesystem::path path(array[i].get<std::string>());
+    files.push_back(path.is_absolute() ? path : base / path);
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(files.back(), error)) reader.Fail(key, "no such file: " + files.back().string());
+  }
+  return files;
+}
+
 Scenario ParseScenarioObject(Reader reader, const std::filesystem::path& base) {
   Scenario scenario;
   scenario.name = reader.String("name");
@@ -212,6 +233,7 @@ Scenario ParseScenarioObject(Reader reader, const std::filesystem::path& base) {
   scenario.truth_rate_hz = reader.NumberIn("truth_rate_hz", 1e-3, 1e4);
   scenario.row_map_height_m = reader.NumberIn("row_map_height_m", 0.0, 100.0);
   ReadSensors(reader.Object("sensors"), profiles, scenario);
+  scenario.filter_files = ReadFilterFiles(reader, base);
   reader.RejectUnknownKeys();
   return scenario;
 }

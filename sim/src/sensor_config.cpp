@@ -161,13 +161,16 @@ ImuConfig DefaultImuConfig() {
 
 WheelEncoderConfig DefaultWheelEncoderConfig() { return {50.0, 1024.0, 0.02, 0.0}; }
 
+WheelEncoderConfig WhiteWheelEncoderConfig() { return {50.0, 16777216.0, 0.0, 0.1}; }
+
 SteeringEncoderConfig DefaultSteeringEncoderConfig() { return {50.0, 0.0015, 0.0005}; }
 
 SensorProfiles DefaultSensorProfiles() {
   SensorProfiles p;
   p.gnss = {{"gnss_rtk", DefaultGnssRtkConfig()}, {"gnss_sbas", DefaultGnssSbasConfig()}};
   p.imu = {{"imu_mems", DefaultImuConfig()}};
-  p.wheel_encoder = {{"wheel_encoder_1024", DefaultWheelEncoderConfig()}};
+  p.wheel_encoder = {{"wheel_encoder_1024", DefaultWheelEncoderConfig()},
+                     {"wheel_encoder_white", WhiteWheelEncoderConfig()}};
   p.steering_encoder = {{"steering_encoder_12bit", DefaultSteeringEncoderConfig()}};
   return p;
 }

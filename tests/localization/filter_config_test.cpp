@@ -234,6 +234,20 @@ TEST(FilterConfig, CanopyGnssFlatFileTradesTheIterationsForALowerSpeedNoiseAndAW
   EXPECT_EQ(FilterConfig{}.slip_aware_odometry.rolling_radius_sigma_m, 0.01);
 }
 
+TEST(FilterConfig, WhiteEncoderFileHasTheSimulatedSensorsNoises) {
+  // The whiteness control (docs/localization-filter.md §5.11): the noises of the simulated sensors
+  // where the default is conservative. The encoder wheel_encoder_white has no relative speed error,
+  // the IMU profile's bias walk is 0.0004 m/s^2/sqrt(s), and the simulated vehicles hold their speed.
+  FilterConfig expected;
+  expected.name = "white-encoder";
+  expected.wheels.speed_sigma_fraction = 0.0;
+  expected.process_noise.accel_bias_mps2_per_sqrt_hz = 0.0004;
+  expected.process_noise.velocity_mps_per_sqrt_hz = 0.002;
+  ExpectEqualConfigs(LoadFilterConfig(FilterFile("white-encoder")), expected);
+  EXPECT_EQ(FilterConfig{}.wheels.speed_sigma_fraction, 0.01);
+  EXPECT_EQ(FilterConfig{}.process_noise.accel_bias_mps2_per_sqrt_hz, 0.05);
+}
+
 TEST(FilterConfig, NoSideSlipFileDiffersInTheNonHolonomicSigmaAndTheYawNoise) {
   // For wheels that do not slide sideways and smooth row following (docs/map-aided-update.md §3.1).
   FilterConfig expected;
@@ -342,9 +356,11 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
   EXPECT_THAT(ErrorOf(std::string("{ \"name\": ")), AllOf(HasSubstr("edited.json"), HasSubstr("invalid JSON")));
 }
 
-/// Numeric keys for which 0 is valid: no encoder filter, calibration states that do not drift,
-/// independent wheels' kappas and radius walks, a carried calibration taken as it is.
+/// Numeric keys for which 0 is valid: no encoder filter, a wheel noise without a relative part (the
+/// absolute sigma keeps it positive), calibration states that do not drift, independent wheels'
+/// kappas and radius walks, a carried calibration taken as it is.
 const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
+                                          "wheels.speed_sigma_fraction",
                                           "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_wheel_correlation",

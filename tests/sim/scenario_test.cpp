@@ -1,4 +1,5 @@
 #include "rowloc/sim/scenario.hpp"
+#include "rowloc/sim/sensor_config.hpp"
 
 #include "test_support.hpp"
 
@@ -70,7 +71,10 @@ TEST(ScenarioTest, EveryShippedScenarioLoads) {
                                "vineyard-002-rough-4us", "agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel",
                                "slip-odometry-loops", "slip-odometry-turns", "tracked-straight", "tracked-circle",
                                "vineyard-002-north-4us", "vineyard-002-4us-miss30", "vineyard-002-4us-gnss-loss",
-                               "vineyard-curved-4us", "tracked-circle-gnss-loss", "tracked-turns-gnss-loss"}) {
+                               "vineyard-curved-4us", "tracked-circle-gnss-loss", "tracked-turns-gnss-loss",
+                               "agrimaro-tiles-white-encoder", "agrimaro-grass-white-encoder",
+                               "agrimaro-gravel-white-encoder", "slip-odometry-loops-white-encoder",
+                               "slip-odometry-turns-white-encoder"}) {
     EXPECT_TRUE(names.contains(expected)) << expected;
   }
 }
@@ -101,6 +105,49 @@ TEST(ScenarioTest, RobustnessVariantsChangeOneThingOfTheFourSensorRun) {
   const Scenario north = LoadScenario(ScenarioDir() / "vineyard-002-north-4us.json");
   EXPECT_NEAR(north.world->heading_rad, std::numbers::pi / 2, 1e-15);  // rows along y
   EXPECT_EQ(LoadScenario(ScenarioDir() / "vineyard-002-8us.json").vehicle.ultrasonic.size(), 8u);
+}
+
+// The whiteness controls (docs/localization-filter.md §5.11) are their base runs with the control
+// encoder: nothing else may differ, or the comparison of the wheel innovations would not isolate it.
+TEST(ScenarioTest, WhiteEncoderVariantsChangeOnlyTheEncoder) {
+  for (const std::string base :
+       {"agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel", "slip-odometry-loops", "slip-odometry-turns"}) {
+    SCOPED_TRACE(base);
+    json variant = ShippedJson(base + "-white-encoder");
+    EXPECT_EQ(variant["sensors"]["wheel_encoder"]["profile"], "wheel_encoder_white");
+    const Scenario loaded = LoadScenario(ScenarioDir() / (base + "-white-encoder.json"));
+    EXPECT_EQ(loaded.wheel_encoder, WhiteWheelEncoderConfig());
+    ASSERT_EQ(loaded.filter_files.size(), 1u);  // the filter file with the simulated sensors' noises
+    EXPECT_EQ(loaded.filter_files[0].filename(), "white-encoder.json");
+    json expected = ShippedJson(base);
+    for (json* document : {&variant, &expected}) {
+      document->erase("name");
+      document->erase("description");
+      document->erase("filters");
+      (*document)["sensors"].erase("wheel_encoder");
+    }
+    EXPECT_EQ(variant, expected);
+  }
+}
+
+TEST(ScenarioTest, FiltersAreOptionalAndNameExistingFiles) {
+  EXPECT_TRUE(LoadScenario(ScenarioDir() / "agrimaro-tiles.json").filter_files.empty());
+  const Scenario named = ParseModified("agrimaro-tiles", [](json& s) {
+    s["filters"] = json::array({"../filters/differential.json", "../filters/wheel-angles.json"});
+  });
+  ASSERT_EQ(named.filter_files.size(), 2u);
+  EXPECT_EQ(named.filter_files[0], ScenarioDir() / "../filters/differential.json");
+  EXPECT_TRUE(std::filesystem::is_regular_file(named.filter_files[1]));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["filters"] = "../filters/default.json"; }),
+              HasSubstr("test.json: filters: must be an array"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["filters"] = json::array({"../filters/absent.json"}); }),
+              AllOf(HasSubstr("test.json: filters[0]: no such file: "), HasSubstr("absent.json")));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["filters"] = json::array({"../filters", 3}); }),
+              HasSubstr("test.json: filters[0]: no such file: "));  // a directory is not a file
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["filters"] = json::array({"../filters/default.json", 3}); }),
+              HasSubstr("test.json: filters[1]: must name a filter file, got 3"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& s) { s["filters"] = json::array({""}); }),
+              HasSubstr("test.json: filters[0]: must name a filter file, got \"\""));
 }
 
 TEST(ScenarioTest, MountsReferToTheVehicleOrAreGiven) {

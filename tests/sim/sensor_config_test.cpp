@@ -52,6 +52,7 @@ TEST(SensorConfig, ShippedFileEqualsInCodeDefaults) {
   EXPECT_EQ(FindGnssProfile(loaded, "gnss_sbas"), DefaultGnssSbasConfig());
   EXPECT_EQ(FindImuProfile(loaded, "imu_mems"), DefaultImuConfig());
   EXPECT_EQ(FindWheelEncoderProfile(loaded, "wheel_encoder_1024"), DefaultWheelEncoderConfig());
+  EXPECT_EQ(FindWheelEncoderProfile(loaded, "wheel_encoder_white"), WhiteWheelEncoderConfig());
   EXPECT_EQ(FindSteeringEncoderProfile(loaded, "steering_encoder_12bit"), DefaultSteeringEncoderConfig());
 }
 

@@ -135,7 +135,7 @@ struct ImuNoise {
 
 struct WheelNoise {
   double speed_sigma_radps = 0.1;  ///< per wheel, per sample (quantization, noise)
-  /// Relative part: sigma_i^2 = speed_sigma_radps^2 + (speed_sigma_fraction omega_i)^2 (slip that
+  /// Relative part, >= 0: sigma_i^2 = speed_sigma_radps^2 + (speed_sigma_fraction omega_i)^2 (slip that
   /// the model does not capture: use the slip range of the terrain without slip-aware odometry).
   double speed_sigma_fraction = 0.01;
   /// Side-slip sigma of the non-holonomic constraint (lateral wheel-centre velocity = 0), m/s; it

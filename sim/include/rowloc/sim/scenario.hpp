@@ -78,6 +78,11 @@ struct Scenario {
   std::optional<TorqueScenario> torque;
   std::optional<UltrasonicScenario> ultrasonic;           ///< requires a world
   std::optional<VioScenario> vio;
+  /// "filters" (optional): filter files the scenario is meant to be measured with besides
+  /// config/filters/default.json, resolved against the scenario's directory; each must be a file.
+  /// scripts/validate-sim replays each (docs/simulation-scenarios.md). Their content is the
+  /// localization's to check (`rowloc replay` parses them); the simulator only references them.
+  std::vector<std::filesystem::path> filter_files;
 };
 
 /// Parses scenario text; relative file references resolve against base_directory, and source_name
