@@ -6,8 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <filesystem>
+#include <numbers>
 #include <set>
 #include <string>
 #include <system_error>
@@ -209,8 +209,10 @@ std::vector<std::filesystem::path> ReadFilterFiles(Reader& reader, const std::fi
     }
     const std::filesystem::path path(array[i].get<std::string>());
     files.push_back(path.is_absolute() ? path : base / path);
-    std::error_code error;
-    if (!std::filesystem::is_regular_file(files.back(), error)) reader.Fail(key, "no such file: " + files.back().string());
+    std::error_code error;  // an unreadable path is "no such file" too, not an exception
+    if (!std::filesystem::is_regular_file(files.back(), error)) {
+      reader.Fail(key, "no such file: " + files.back().string());
+    }
   }
   return files;
 }

@@ -48,9 +48,9 @@ ImuConfig DefaultImuConfig();        ///< "imu_mems": consumer-grade MEMS IMU
 WheelEncoderConfig DefaultWheelEncoderConfig();        ///< "wheel_encoder_1024"
 /// "wheel_encoder_white": 2^24 ticks per revolution (speed step at 50 Hz 1.9e-5 rad/s, against
 /// 0.31 rad/s at 1024 ticks), no low-pass, white Gaussian speed noise of 0.1 rad/s (the default
-/// filter's wheel sigma). A control sensor: its speed error is what the
-/// filter's wheel model assumes, so the filter's own model error shows in the innovations' whiteness
-/// apart from the 1024-tick encoder's correlated quantization (docs/localization-filter.md §5.11).
+/// filter's wheel sigma). A control sensor: its speed error is what the filter's wheel model
+/// assumes, so the innovations' whiteness shows the filter's own model error, apart from the
+/// 1024-tick encoder's correlated quantization (docs/localization-filter.md §5.11).
 WheelEncoderConfig WhiteWheelEncoderConfig();
 SteeringEncoderConfig DefaultSteeringEncoderConfig();  ///< "steering_encoder_12bit"
 SensorProfiles DefaultSensorProfiles();
