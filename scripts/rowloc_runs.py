@@ -64,16 +64,21 @@ def replay_and_evaluate(rowloc, run_dir, vehicle, filter_path, skip, out_dir, to
         return json.load(f)
 
 
+def sensor_innovations(report, sensor):
+    """One sensor's entry of a report's `innovations`, or None when it has no updates."""
+    return next((s for s in report.get("innovations", []) if s["sensor"] == sensor), None)
+
+
 def sensor_nis(report, sensor):
     """The NIS summary of one sensor's updates in a report, or None when it has no updates."""
-    return next((s["nis"] for s in report.get("innovations", []) if s["sensor"] == sensor), None)
+    entry = sensor_innovations(report, sensor)
+    return entry["nis"] if entry else None
 
 
 def sensor_whiteness(report, sensor):
     """The fraction of one sensor's whiteness lags inside their band, or None when it was not computed
     (no updates, or too few for one lag)."""
-    entry = next((s for s in report.get("innovations", []) if s["sensor"] == sensor), None)
-    whiteness = (entry or {}).get("whiteness") or {}
+    whiteness = (sensor_innovations(report, sensor) or {}).get("whiteness") or {}
     return None if whiteness.get("not_computed") else whiteness.get("fraction_inside")
 
 
