@@ -29,6 +29,7 @@
 // the R-tree, the smoothed row directions and the lane clearances (two ray casts per segment).
 // Run the Release build with
 //   map_aided_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/geometry/segment_index.hpp"
 #include "rowloc/localization/filter_config.hpp"
@@ -54,6 +55,7 @@
 namespace {
 
 namespace geo = rowloc::geometry;
+namespace formats = rowloc::formats;
 namespace loc = rowloc::localization;
 using rowloc::mapio::VehicleConfig;
 
@@ -138,7 +140,7 @@ struct World {
 
   struct Block {
     Eigen::Vector3d start;                      ///< the filter's pose at the reset
-    std::vector<loc::SensorMessage> messages;   ///< kUpdatesPerBlock x 4 echoes, from t = kMessageStepS
+    std::vector<formats::SensorMessage> messages;   ///< kUpdatesPerBlock x 4 echoes, from t = kMessageStepS
   };
   std::vector<Block> blocks;
   /// The same number of blocks for the driving variant: the truth drives along its lane at
@@ -156,7 +158,7 @@ struct World {
         for (std::size_t s = 0; s < mounts.size(); ++s) {
           const double t = kMessageStepS * static_cast<double>(4 * k + static_cast<int>(s) + 1);
           const double range = ranges[s] + config.map_aided.range_sigma_m * n01(rng);
-          block.messages.push_back(loc::UltrasonicMessage{t, vehicle.ultrasonic[s].name, s, range});
+          block.messages.push_back(formats::UltrasonicMessage{t, vehicle.ultrasonic[s].name, s, range});
         }
       }
       blocks.push_back(std::move(block));
@@ -182,7 +184,7 @@ struct World {
           const double t = kDrivingStepS * static_cast<double>(4 * k + static_cast<int>(s) + 1);
           const Eigen::Vector3d truth = LanePoseAt(params, lane, u0 + direction * kDrivingSpeedMps * t, back);
           const double range = TrueRanges(truth)[s] + config.map_aided.range_sigma_m * n01(rng);
-          block.messages.push_back(loc::UltrasonicMessage{t, vehicle.ultrasonic[s].name, s, range});
+          block.messages.push_back(formats::UltrasonicMessage{t, vehicle.ultrasonic[s].name, s, range});
         }
       }
       driving_blocks.push_back(std::move(block));
@@ -259,7 +261,8 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, Variant var
   if (variant == Variant::kOneStamp) {
     for (World::Block& block : blocks) {
       for (std::size_t i = 0; i < block.messages.size(); ++i) {
-        std::get<loc::UltrasonicMessage>(block.messages[i]).time_s = 4.0 * kMessageStepS * static_cast<double>(i / 4 + 1);
+        std::get<formats::UltrasonicMessage>(block.messages[i]).time_s =
+            4.0 * kMessageStepS * static_cast<double>(i / 4 + 1);
       }
     }
   }
@@ -281,7 +284,9 @@ void RunUpdates(benchmark::State& state, loc::MapAidedMethod method, Variant var
   const auto reset = [&](loc::VehicleEkf& ekf, std::size_t b) {
     ekf = base;
     ekf.SetPose(0.0, blocks[b].start, PoseCovariance());
-    if (variant == Variant::kDriving) ekf.Process(loc::WheelsMessage{0.0, wheel_speeds, std::nullopt, std::nullopt});
+    if (variant == Variant::kDriving) {
+      ekf.Process(formats::WheelsMessage{0.0, wheel_speeds, std::nullopt, std::nullopt});
+    }
   };
 
   // Setup check: one pass over every block, untimed. Every echo must find its row, no state may

@@ -9,6 +9,7 @@
 // restores x and P first (the copy is timed too; BM_RestoreStateAndCovariance is that copy alone).
 // Run the Release build with
 //   vehicle_ekf_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/measurement_models.hpp"
@@ -28,6 +29,7 @@
 
 namespace {
 
+namespace formats = rowloc::formats;
 namespace loc = rowloc::localization;
 using rowloc::mapio::VehicleConfig;
 
@@ -47,27 +49,27 @@ double WheelRate(const rowloc::mapio::WheelGeometry& w) {
 
 /// Messages of cycle k of the lap (times relative to the lap start; wheel angles, when wanted, are
 /// set by Converged::RunCycle from the absolute time).
-std::vector<std::vector<loc::SensorMessage>> MakeLap(const VehicleConfig& v, bool torque, bool angles) {
+std::vector<std::vector<formats::SensorMessage>> MakeLap(const VehicleConfig& v, bool torque, bool angles) {
   const rowloc::mapio::LocalFrame frame(kOrigin);
   std::mt19937_64 rng(4);
   std::normal_distribution<double> n01;
   const bool steers = v.kind == rowloc::mapio::VehicleKind::kSwerveDrive ||
                       v.kind == rowloc::mapio::VehicleKind::kFourWheelSteer;
-  std::vector<std::vector<loc::SensorMessage>> lap(kCyclesPerLap);
+  std::vector<std::vector<formats::SensorMessage>> lap(kCyclesPerLap);
   for (int k = 0; k < kCyclesPerLap; ++k) {
     const double t = 0.01 * k, phi = kYawRate * t;
     const Eigen::Vector2d p(kSpeed / kYawRate * std::sin(phi), kSpeed / kYawRate * (1.0 - std::cos(phi)));
     const Eigen::Vector2d antenna = p + Rotate(phi, v.gnss_antenna.position_m.head<2>()) +
                                     0.01 * Eigen::Vector2d(n01(rng), n01(rng));
     const rowloc::geometry::GeoOrigin g = frame.ToGeodetic({antenna.x(), antenna.y(), 0.0});
-    lap[k].push_back(loc::GpsMessage{t, "gnss", loc::GnssFixQuality::kRtkFixed,
-                                     loc::GpsPosition{g.latitude_deg, g.longitude_deg, g.altitude_m, 0.01, 0.02}});
+    const formats::GpsPosition position{g.latitude_deg, g.longitude_deg, g.altitude_m, 0.01, 0.02};
+    lap[k].push_back(formats::GpsMessage{t, "gnss", formats::GnssFixQuality::kRtkFixed, position});
     const Eigen::Vector2d l = v.imu.position_m.head<2>();
-    lap[k].push_back(loc::ImuMessage{t, "imu", -kYawRate * kYawRate * l.x() + 0.01 * n01(rng),
-                                     kYawRate * kSpeed - kYawRate * kYawRate * l.y() + 0.01 * n01(rng),
-                                     kYawRate + 5e-4 * n01(rng)});
-    loc::SteeringMessage steering{t, {}};
-    loc::WheelsMessage wheels{t, {}, std::nullopt, std::nullopt};
+    lap[k].push_back(formats::ImuMessage{t, "imu", -kYawRate * kYawRate * l.x() + 0.01 * n01(rng),
+                                         kYawRate * kSpeed - kYawRate * kYawRate * l.y() + 0.01 * n01(rng),
+                                         kYawRate + 5e-4 * n01(rng)});
+    formats::SteeringMessage steering{t, {}};
+    formats::WheelsMessage wheels{t, {}, std::nullopt, std::nullopt};
     for (const auto& w : v.wheels) {
       const Eigen::Vector2d c(kSpeed - kYawRate * w.position_m.y(), kYawRate * w.position_m.x());
       steering.angle_rad.push_back(w.steerable ? std::optional<double>(std::atan2(c.y(), c.x())) : std::nullopt);
@@ -84,7 +86,7 @@ std::vector<std::vector<loc::SensorMessage>> MakeLap(const VehicleConfig& v, boo
 /// A filter at the start of the lap, converged over two laps; `fraction` gets the share of accepted updates.
 struct Converged {
   loc::VehicleEkf ekf;
-  std::vector<std::vector<loc::SensorMessage>> lap;
+  std::vector<std::vector<formats::SensorMessage>> lap;
   long cycle = 0;  ///< cycles processed so far (time = 0.01 cycle)
   double accepted_fraction = 0.0;
 
@@ -111,7 +113,7 @@ struct Converged {
   std::vector<loc::UpdateRecord> RunCycle() {
     std::vector<loc::UpdateRecord> records;
     const double t = 0.01 * static_cast<double>(cycle);
-    for (loc::SensorMessage& m : lap[static_cast<std::size_t>(cycle % kCyclesPerLap)]) {
+    for (formats::SensorMessage& m : lap[static_cast<std::size_t>(cycle % kCyclesPerLap)]) {
       SetTime(m, t);
       loc::ProcessResult r = ekf.Process(m);
       for (auto& u : r.updates) records.push_back(std::move(u));
@@ -123,7 +125,7 @@ struct Converged {
   /// optimizer (no copies, unlike RunCycle).
   void TimedCycle() {
     const double t = 0.01 * static_cast<double>(cycle);
-    for (loc::SensorMessage& m : lap[static_cast<std::size_t>(cycle % kCyclesPerLap)]) {
+    for (formats::SensorMessage& m : lap[static_cast<std::size_t>(cycle % kCyclesPerLap)]) {
       SetTime(m, t);
       auto result = ekf.Process(m);
       benchmark::DoNotOptimize(result);
@@ -131,9 +133,9 @@ struct Converged {
     ++cycle;
   }
   /// Sets a message's time to t and, for wheels with angles, the angles the wheels turned by t.
-  void SetTime(loc::SensorMessage& m, double t) const {
+  void SetTime(formats::SensorMessage& m, double t) const {
     std::visit([t](auto& message) { message.time_s = t; }, m);
-    if (auto* wheels = std::get_if<loc::WheelsMessage>(&m); wheels && wheels->angle_rad) {
+    if (auto* wheels = std::get_if<formats::WheelsMessage>(&m); wheels && wheels->angle_rad) {
       for (std::size_t i = 0; i < wheel_rates_radps.size(); ++i) (*wheels->angle_rad)[i] = wheel_rates_radps[i] * t;
     }
   }
@@ -154,7 +156,9 @@ void RunCycles(benchmark::State& state, const VehicleConfig& v, const loc::Filte
   Converged c(v, config);
   if (!steering) {  // issue 4's cycle exactly: predict + GPS + IMU + wheels (steering angles then float)
     for (auto& messages : c.lap) {
-      std::erase_if(messages, [](const loc::SensorMessage& m) { return std::holds_alternative<loc::SteeringMessage>(m); });
+      std::erase_if(messages, [](const formats::SensorMessage& m) {
+        return std::holds_alternative<formats::SteeringMessage>(m);
+      });
     }
   }
   if (c.accepted_fraction < 0.99) {

@@ -23,6 +23,8 @@ void RegisterCommands(CLI::App& app) {
   RegisterSimulateCommand(app);
   RegisterEvaluateCommand(app);
   RegisterReplayCommand(app);
+  RegisterServeCommand(app);
+  RegisterSendCommand(app);
 }
 
 }  // namespace rowloc::apps

@@ -25,5 +25,7 @@ void RegisterWorldCommand(CLI::App& app);      // world_command.cpp
 void RegisterSimulateCommand(CLI::App& app);   // simulate_command.cpp
 void RegisterEvaluateCommand(CLI::App& app);   // evaluate_command.cpp
 void RegisterReplayCommand(CLI::App& app);     // replay_command.cpp
+void RegisterServeCommand(CLI::App& app);      // serve_command.cpp
+void RegisterSendCommand(CLI::App& app);       // send_command.cpp
 
 }  // namespace rowloc::apps

@@ -3,12 +3,12 @@
 // Errors (unreadable or malformed input, an estimate outside the truth's span) exit with status 2.
 #include "commands.hpp"
 
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/geometry/segment_index.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/sim/evaluation_report.hpp"
 #include "rowloc/sim/metrics.hpp"
 #include "rowloc/sim/report_plots.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 
 #include <fmt/format.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -37,12 +37,12 @@ struct EvaluateOptions {
   bool json = false;
 };
 
-sim::LineProgress ProgressFor(const std::string& path) {
+formats::LineProgress ProgressFor(const std::string& path) {
   return [path](std::size_t lines) { spdlog::info("{}: {} lines read", path, lines); };
 }
 
-void MakePlots(const EvaluateOptions& o, const sim::EvaluationResult& result, const sim::TruthStream& truth,
-               const sim::EstimateStream& estimates, const std::optional<geometry::RowMap>& map) {
+void MakePlots(const EvaluateOptions& o, const sim::EvaluationResult& result, const formats::TruthStream& truth,
+               const formats::EstimateStream& estimates, const std::optional<geometry::RowMap>& map) {
   const sim::PlotFiles files = sim::WritePlotFiles(result, truth, estimates, map,
                                                    std::filesystem::path(o.output_dir) / "plots", o.plot);
   const sim::GnuplotRun run = sim::RunGnuplot(files);
@@ -55,7 +55,7 @@ void MakePlots(const EvaluateOptions& o, const sim::EvaluationResult& result, co
 
 /// --clip-to-truth: estimates and updates outside the truth's time span are dropped, and counted in
 /// the log (a replay's last messages may follow the simulator's last truth sample).
-void ClipToTruth(sim::EstimateStream& estimates, const sim::TruthStream& truth) {
+void ClipToTruth(formats::EstimateStream& estimates, const formats::TruthStream& truth) {
   if (truth.samples.empty()) return;
   const double first = truth.samples.front().t_s, last = truth.samples.back().t_s;
   const auto outside = [&](const auto& sample) { return sample.t_s < first || sample.t_s > last; };
@@ -69,7 +69,7 @@ void ClipToTruth(sim::EstimateStream& estimates, const sim::TruthStream& truth) 
 
 /// --settle S: the filter's convergence (the first S seconds after its first estimate) is left out,
 /// so that mean and max describe the converged filter; the count is logged.
-void DropSettling(sim::EstimateStream& estimates, double settle_s) {
+void DropSettling(formats::EstimateStream& estimates, double settle_s) {
   if (settle_s <= 0.0 || estimates.estimates.empty()) return;
   const double until = estimates.estimates.front().t_s + settle_s;
   const auto settling = [&](const auto& sample) { return sample.t_s < until; };
@@ -82,9 +82,9 @@ void DropSettling(sim::EstimateStream& estimates, double settle_s) {
 
 void RunEvaluate(const EvaluateOptions& o) {
   if (o.json) spdlog::set_default_logger(spdlog::stderr_color_mt("rowloc-evaluate"));  // stdout is for JSON
-  const sim::TruthStream truth = sim::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
+  const formats::TruthStream truth = formats::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
   spdlog::info("{}: {} truth samples", o.truth_path, truth.samples.size());
-  sim::EstimateStream estimates = sim::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
+  formats::EstimateStream estimates = formats::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
   if (o.clip_to_truth) ClipToTruth(estimates, truth);
   DropSettling(estimates, o.settle_s);
   spdlog::info("{}: {} estimates, {} updates", o.estimates_path, estimates.estimates.size(), estimates.updates.size());

@@ -241,13 +241,13 @@ std::optional<MapAidedMethod> MapAidedMethodFromName(std::string_view name) {
   return std::nullopt;
 }
 
-double GpsSigma(const GpsNoise& noise, GnssFixQuality fix, double receiver_sigma_horizontal_m) {
+double GpsSigma(const GpsNoise& noise, formats::GnssFixQuality fix, double receiver_sigma_horizontal_m) {
   double floor = 0.0;
   switch (fix) {
-    case GnssFixQuality::kRtkFixed: floor = noise.sigma_floor_rtk_fixed_m; break;
-    case GnssFixQuality::kRtkFloat: floor = noise.sigma_floor_rtk_float_m; break;
-    case GnssFixQuality::kSbas: floor = noise.sigma_floor_sbas_m; break;
-    case GnssFixQuality::kNone: throw std::invalid_argument("GpsSigma: a fix quality of none has no position");
+    case formats::GnssFixQuality::kRtkFixed: floor = noise.sigma_floor_rtk_fixed_m; break;
+    case formats::GnssFixQuality::kRtkFloat: floor = noise.sigma_floor_rtk_float_m; break;
+    case formats::GnssFixQuality::kSbas: floor = noise.sigma_floor_sbas_m; break;
+    case formats::GnssFixQuality::kNone: throw std::invalid_argument("GpsSigma: a fix quality of none has no position");
   }
   return std::max(floor, noise.sigma_scale * receiver_sigma_horizontal_m);
 }

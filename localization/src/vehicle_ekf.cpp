@@ -97,9 +97,9 @@ void VehicleEkf::Reset() {
   p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
 }
 
-ProcessResult VehicleEkf::Process(const SensorMessage& message) {
+ProcessResult VehicleEkf::Process(const formats::SensorMessage& message) {
   Validate(message);
-  const double t = TimeOf(message);
+  const double t = formats::TimeOf(message);
   std::optional<std::string> gap_notice;
   if (initialised_ && t - time_s_ > config_.max_prediction_gap_s) {
     std::ostringstream notice;
@@ -147,10 +147,10 @@ UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const Vecto
   return record;
 }
 
-ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
+ProcessResult VehicleEkf::Apply(const formats::GpsMessage& gps) {
   ProcessResult result;
   if (!gps.position) return result;  // no fix: nothing measured
-  const GpsPosition& fix = *gps.position;
+  const formats::GpsPosition& fix = *gps.position;
   const Eigen::Vector2d antenna = frame_.ToEnu(fix.latitude_deg, fix.longitude_deg, fix.altitude_m).head<2>();
   if (!initialised_) {
     result.notice = TryInitialise(gps, antenna);
@@ -180,7 +180,7 @@ ProcessResult VehicleEkf::Apply(const GpsMessage& gps) {
   return result;
 }
 
-ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
+ProcessResult VehicleEkf::Apply(const formats::ImuMessage& imu) {
   ProcessResult result;
   if (!initialised_) return result;
   // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
@@ -196,7 +196,7 @@ ProcessResult VehicleEkf::Apply(const ImuMessage& imu) {
   return result;
 }
 
-ProcessResult VehicleEkf::Apply(const WheelsMessage& wheels) {
+ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
   const std::size_t n = vehicle_.wheels.size();
   last_speed_radps_.assign(n, 0.0);
   if (wheels.torque_nm) {
@@ -292,7 +292,7 @@ void VehicleEkf::Reanchor(int index, double value, double variance) {
   x_(index) = value;
 }
 
-bool VehicleEkf::ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result) {
+bool VehicleEkf::ApplyWheelAngles(const formats::WheelsMessage& wheels, ProcessResult& result) {
   const std::size_t n = vehicle_.wheels.size();
   UpdateBuffers& b = update_buffers_;
   Eigen::VectorXd& z = b.measured;
@@ -339,7 +339,7 @@ void VehicleEkf::AnchorWheelAngles(const Eigen::VectorXd& z) {
   wheel_angles_anchored_ = true;
 }
 
-ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
+ProcessResult VehicleEkf::Apply(const formats::SteeringMessage& steering) {
   last_steering_rad_.assign(vehicle_.wheels.size(), std::nullopt);
   UpdateBuffers& b = update_buffers_;
   std::vector<std::size_t>& wheels = b.steered_wheels;
@@ -369,7 +369,7 @@ ProcessResult VehicleEkf::Apply(const SteeringMessage& steering) {
   return result;
 }
 
-ProcessResult VehicleEkf::Apply(const VioMessage& vio) {
+ProcessResult VehicleEkf::Apply(const formats::VioMessage& vio) {
   ProcessResult result;
   if (!initialised_) return result;
   LinearizedMeasurement& h = update_buffers_.vio;

@@ -37,7 +37,7 @@ std::optional<std::size_t> VehicleEkf::UltrasonicIndex(const std::string& name, 
   return static_cast<std::size_t>(it - vehicle_.ultrasonic.begin());
 }
 
-ProcessResult VehicleEkf::Apply(const UltrasonicMessage& ping) {
+ProcessResult VehicleEkf::Apply(const formats::UltrasonicMessage& ping) {
   ProcessResult result;
   if (!ranging_ || !initialised_ || !ping.range_m) return result;  // no echo: no measurement
   MapAidedStats& stats = map_aided_stats_;

@@ -18,17 +18,17 @@ using L = StateLayout;
 
 namespace {
 
-[[noreturn]] void Reject(const SensorMessage& message, const std::string& reason) {
+[[noreturn]] void Reject(const formats::SensorMessage& message, const std::string& reason) {
   std::ostringstream text;
-  text << TypeOf(message) << " at t=" << TimeOf(message) << " s: " << reason;
+  text << formats::TypeOf(message) << " at t=" << formats::TimeOf(message) << " s: " << reason;
   throw FilterInputError(text.str());
 }
 
-void RequireFinite(const SensorMessage& message, double value, const char* field) {
+void RequireFinite(const formats::SensorMessage& message, double value, const char* field) {
   if (!std::isfinite(value)) Reject(message, std::string(field) + " must be finite");
 }
 
-void RequirePositive(const SensorMessage& message, double value, const char* field) {
+void RequirePositive(const formats::SensorMessage& message, double value, const char* field) {
   if (!(std::isfinite(value) && value > 0.0)) Reject(message, std::string(field) + " must be finite and > 0");
 }
 
@@ -36,9 +36,28 @@ void RequirePositive(const SensorMessage& message, double value, const char* fie
 /// a receiver claiming kilometres has no position worth fusing).
 constexpr double kMaxSigma = 1e4;
 
-void RequireSigma(const SensorMessage& message, double value, const char* field) {
+void RequireSigma(const formats::SensorMessage& message, double value, const char* field) {
   RequirePositive(message, value, field);
   if (value > kMaxSigma) Reject(message, std::string(field) + " above 1e4 (out of range)");
+}
+
+/// Magnitudes no sensor of a ground robot produces: a value beyond one is a fault, refused like a
+/// non-finite one (a torque of 1e300 once passed the finiteness check and made the covariance NaN).
+constexpr double kMaxTorqueNm = 1e5;           ///< a tractor's wheel sees about 1e4 N m
+constexpr double kMaxAccelerationMps2 = 1e4;   ///< 1000 g, beyond any MEMS range
+constexpr double kMaxYawRateRadps = 100.0;     ///< 16 turns a second
+constexpr double kMaxVelocityMps = 1e5;
+constexpr double kMaxAltitudeM = 1e5;          ///< |altitude| above the ellipsoid
+constexpr double kMaxRangeM = 1e3;
+constexpr double kMaxWheelAngleRad = 1e12;     ///< a wheel turning at 100 rad/s for 300 years
+
+void RequireWithin(const formats::SensorMessage& message, double value, double limit, const char* field) {
+  RequireFinite(message, value, field);
+  if (std::abs(value) > limit) {
+    std::ostringstream reason;
+    reason << field << " beyond " << limit << " in magnitude (no sensor produces it)";
+    Reject(message, reason.str());
+  }
 }
 
 /// Minimum GNSS baseline for the initial heading, in fix sigmas.
@@ -46,8 +65,8 @@ constexpr double kBaselineSigmas = 10.0;
 
 }  // namespace
 
-void VehicleEkf::Validate(const SensorMessage& message) const {
-  const double t = TimeOf(message);
+void VehicleEkf::Validate(const formats::SensorMessage& message) const {
+  const double t = formats::TimeOf(message);
   RequireFinite(message, t, "t");
   if (t < time_s_) {
     std::ostringstream reason;
@@ -55,19 +74,19 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
     Reject(message, reason.str());
   }
   const std::size_t n = vehicle_.wheels.size();
-  if (const auto* gps = std::get_if<GpsMessage>(&message); gps && gps->position) {
-    const GpsPosition& p = *gps->position;
+  if (const auto* gps = std::get_if<formats::GpsMessage>(&message); gps && gps->position) {
+    const formats::GpsPosition& p = *gps->position;
     RequireFinite(message, p.latitude_deg, "latitude_deg");
     RequireFinite(message, p.longitude_deg, "longitude_deg");
-    RequireFinite(message, p.altitude_m, "altitude_m");
+    RequireWithin(message, p.altitude_m, kMaxAltitudeM, "altitude_m");
     if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) Reject(message, "position outside WGS84 range");
     RequireSigma(message, p.sigma_horizontal_m, "sigma_horizontal_m");
     RequireSigma(message, p.sigma_vertical_m, "sigma_vertical_m");
-  } else if (const auto* imu = std::get_if<ImuMessage>(&message)) {
-    RequireFinite(message, imu->accel_x_mps2, "accel_x_mps2");
-    RequireFinite(message, imu->accel_y_mps2, "accel_y_mps2");
-    RequireFinite(message, imu->gyro_z_radps, "gyro_z_radps");
-  } else if (const auto* wheels = std::get_if<WheelsMessage>(&message)) {
+  } else if (const auto* imu = std::get_if<formats::ImuMessage>(&message)) {
+    RequireWithin(message, imu->accel_x_mps2, kMaxAccelerationMps2, "accel_x_mps2");
+    RequireWithin(message, imu->accel_y_mps2, kMaxAccelerationMps2, "accel_y_mps2");
+    RequireWithin(message, imu->gyro_z_radps, kMaxYawRateRadps, "gyro_z_radps");
+  } else if (const auto* wheels = std::get_if<formats::WheelsMessage>(&message)) {
     if (wheels->speed_radps.size() != n) Reject(message, "expected " + std::to_string(n) + " wheel speeds");
     if (wheels->torque_nm && wheels->torque_nm->size() != n) Reject(message, "expected " + std::to_string(n) + " torques");
     for (const double w : wheels->speed_radps) {
@@ -75,30 +94,33 @@ void VehicleEkf::Validate(const SensorMessage& message) const {
       if (std::abs(w) > config_.wheels.max_speed_radps) Reject(message, "|speed_radps| above wheels.max_speed_radps");
     }
     if (wheels->torque_nm) {
-      for (const double torque : *wheels->torque_nm) RequireFinite(message, torque, "torque_nm");
+      for (const double torque : *wheels->torque_nm) RequireWithin(message, torque, kMaxTorqueNm, "torque_nm");
     }
     if (wheels->angle_rad && wheels->angle_rad->size() != n) Reject(message, "expected " + std::to_string(n) + " wheel angles");
     if (wheels->angle_rad) {
-      for (const double angle : *wheels->angle_rad) RequireFinite(message, angle, "angle_rad");
+      for (const double angle : *wheels->angle_rad) RequireWithin(message, angle, kMaxWheelAngleRad, "angle_rad");
     }
-  } else if (const auto* steering = std::get_if<SteeringMessage>(&message)) {
+  } else if (const auto* steering = std::get_if<formats::SteeringMessage>(&message)) {
     if (steering->angle_rad.size() != n) Reject(message, "expected " + std::to_string(n) + " steering entries");
     for (const auto& angle : steering->angle_rad) {
       if (!angle) continue;
       RequireFinite(message, *angle, "angle_rad");
       if (std::abs(*angle) > vehicle_.max_steering_angle_rad + 0.1) Reject(message, "|angle_rad| above the steering limit");
     }
-  } else if (const auto* vio = std::get_if<VioMessage>(&message)) {
-    RequireFinite(message, vio->velocity_x_mps, "velocity_x_mps");
-    RequireFinite(message, vio->velocity_y_mps, "velocity_y_mps");
+  } else if (const auto* vio = std::get_if<formats::VioMessage>(&message)) {
+    RequireWithin(message, vio->velocity_x_mps, kMaxVelocityMps, "velocity_x_mps");
+    RequireWithin(message, vio->velocity_y_mps, kMaxVelocityMps, "velocity_y_mps");
     RequireSigma(message, vio->sigma_mps, "sigma_mps");
-  } else if (const auto* ping = std::get_if<UltrasonicMessage>(&message)) {
-    if (ping->range_m) RequirePositive(message, *ping->range_m, "range_m");
+  } else if (const auto* ping = std::get_if<formats::UltrasonicMessage>(&message)) {
+    if (ping->range_m) {
+      RequirePositive(message, *ping->range_m, "range_m");
+      RequireWithin(message, *ping->range_m, kMaxRangeM, "range_m");
+    }
     if (ranging_ && !UltrasonicIndex(ping->sensor, ping->sensor_index)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
   }
 }
 
-std::optional<std::string> VehicleEkf::TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna) {
+std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna) {
   if (!anchor_enu_) {
     anchor_enu_ = antenna;
     return std::nullopt;

@@ -32,7 +32,7 @@ void GnssConfig::Validate() const {
   Require(FiniteNonNegative(sigma_horizontal_m), "sigma_horizontal_m must be finite and >= 0");
   Require(FiniteNonNegative(sigma_vertical_m), "sigma_vertical_m must be finite and >= 0");
   Require(FiniteNonNegative(canopy_sigma_gain), "canopy_sigma_gain must be finite and >= 0");
-  Require(nominal_fix != GnssFixQuality::kNone, "nominal_fix must not be 'none'");
+  Require(nominal_fix != formats::GnssFixQuality::kNone, "nominal_fix must not be 'none'");
   ValidateFault(dropout, "dropout");
   ValidateFault(multipath, "multipath");
   Require(FiniteNonNegative(multipath_offset_min_m), "multipath_offset_min_m must be finite and >= 0");

@@ -1,49 +1,23 @@
-// NDJSON writers of docs/protocol.md (see log_writers.hpp).
+// The simulator's sensor-log and truth writers of docs/protocol.md (see log_writers.hpp).
 #include "rowloc/sim/log_writers.hpp"
 
-#include <Eigen/Eigenvalues>
-
-#include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/formats/ndjson_writing.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <set>
 #include <stdexcept>
 
 namespace rowloc::sim {
 namespace {
 
+using formats::ndjson::CheckTimeOrder;
+using formats::ndjson::Finite;
+using formats::ndjson::MessageStart;
+using formats::ndjson::OriginJson;
+using formats::ndjson::Refuse;
 using ordered_json = nlohmann::ordered_json;
-
-[[noreturn]] void Refuse(const char* type, const std::string& reason) {
-  throw std::invalid_argument(std::string(type) + " message refused: " + reason);
-}
-
-double Finite(const char* type, const char* key, double value) {
-  if (!std::isfinite(value)) Refuse(type, std::string(key) + " is not finite");
-  return value;
-}
-
-/// A message object with its first two keys, "type" and "t" (docs/protocol.md key order).
-ordered_json MessageStart(const char* type, double time_s) {
-  ordered_json j;
-  j["type"] = type;
-  j["t"] = time_s;
-  return j;
-}
-
-ordered_json OriginJson(const geometry::GeoOrigin& origin) {
-  const std::string problem =
-      mapio::GeodeticPositionProblem(origin.latitude_deg, origin.longitude_deg, origin.altitude_m);
-  if (!problem.empty()) throw std::invalid_argument("log header: origin: " + problem);
-  ordered_json o;
-  o["latitude_deg"] = origin.latitude_deg;
-  o["longitude_deg"] = origin.longitude_deg;
-  o["altitude_m"] = origin.altitude_m;
-  return o;
-}
 
 void CheckUnique(const std::vector<std::string>& names, const char* what) {
   std::set<std::string> seen;
@@ -55,7 +29,7 @@ void CheckUnique(const std::vector<std::string>& names, const char* what) {
   }
 }
 
-ordered_json HeaderJson(const char* type, const char* protocol, const LogHeader& header) {
+ordered_json HeaderJson(const char* type, const char* protocol, const formats::LogHeader& header) {
   CheckUnique(header.wheels, "wheel");
   CheckUnique(header.ultrasonic, "ultrasonic");
   ordered_json j;
@@ -76,46 +50,10 @@ ordered_json NamedJson(const char* type, const NamedValues& values) {
   return o;
 }
 
-void CheckTimeOrder(const char* type, double time_s, double& last_time_s) {
-  Finite(type, "t", time_s);
-  if (time_s < last_time_s) {
-    Refuse(type, "time goes backwards (" + std::to_string(time_s) + " s after " + std::to_string(last_time_s) + " s)");
-  }
-}
-
-/// `wheel_calibration`: {wheel: {rolling_radius_m, rolling_radius_sigma_m, slip_compliance,
-/// slip_compliance_sigma}}; unique non-empty names, each number finite and in its domain
-/// (kWheelCalibrationFields: R_w > 0, kappa and sigmas >= 0).
-ordered_json CalibrationJson(const char* type, const std::vector<WheelCalibrationRecord>& wheels) {
-  ordered_json out = ordered_json::object();
-  for (const WheelCalibrationRecord& w : wheels) {
-    if (w.wheel.empty() || out.contains(w.wheel)) Refuse(type, "wheel_calibration names must be unique and non-empty");
-    ordered_json numbers = ordered_json::object();
-    for (const WheelCalibrationField& field : kWheelCalibrationFields) {
-      const double value = Finite(type, field.key, w.*field.member);
-      if (!field.InDomain(value)) {
-        Refuse(type, "wheel_calibration of '" + w.wheel + "': " + field.key + " " + field.DomainText());
-      }
-      numbers[field.key] = value;
-    }
-    out[w.wheel] = std::move(numbers);
-  }
-  return out;
-}
-
 }  // namespace
 
-std::string_view GnssFixQualityName(GnssFixQuality fix) {
-  switch (fix) {
-    case GnssFixQuality::kNone: return "none";
-    case GnssFixQuality::kSbas: return "sbas";
-    case GnssFixQuality::kRtkFloat: return "rtk_float";
-    case GnssFixQuality::kRtkFixed: return "rtk_fixed";
-  }
-  return "none";
-}
-
-SensorLogWriter::SensorLogWriter(std::ostream& out, LogHeader header) : out_(out), header_(std::move(header)) {
+SensorLogWriter::SensorLogWriter(std::ostream& out, formats::LogHeader header)
+    : out_(out), header_(std::move(header)) {
   Emit(HeaderJson("log_header", "rowloc/1", header_).dump());
 }
 
@@ -151,8 +89,8 @@ void SensorLogWriter::Write(const GpsMessage& m) {
   CheckTime("gps", m.time_s);
   ordered_json j = MessageStart("gps", m.time_s);
   j["sensor"] = m.sensor;
-  j["fix"] = GnssFixQualityName(m.fix);
-  if (m.fix != GnssFixQuality::kNone) {
+  j["fix"] = formats::GnssFixQualityName(m.fix);
+  if (m.fix != formats::GnssFixQuality::kNone) {
     j["latitude_deg"] = Finite("gps", "latitude_deg", m.latitude_deg);
     j["longitude_deg"] = Finite("gps", "longitude_deg", m.longitude_deg);
     j["altitude_m"] = Finite("gps", "altitude_m", m.altitude_m);
@@ -217,7 +155,8 @@ void SensorLogWriter::Write(const VioMessage& m) {
   EmitMessage(j.dump(), m.time_s);
 }
 
-TruthLogWriter::TruthLogWriter(std::ostream& out, const LogHeader& header) : out_(out), wheels_(header.wheels) {
+TruthLogWriter::TruthLogWriter(std::ostream& out, const formats::LogHeader& header)
+    : out_(out), wheels_(header.wheels) {
   out_ << HeaderJson("truth_header", "rowloc-truth/1", header).dump() << '\n';
   if (!out_) throw std::runtime_error("truth log: write failed");
 }
@@ -262,80 +201,6 @@ void TruthLogWriter::Write(const TruthRecord& r) {
   if (!out_) throw std::runtime_error("truth log: write failed");
   last_time_s_ = r.time_s;
   ++records_;
-}
-
-EstimateLogWriter::EstimateLogWriter(std::ostream& out, const std::string& source, const std::string& vehicle,
-                                     const geometry::GeoOrigin& origin)
-    : out_(out) {
-  ordered_json j;
-  j["type"] = "estimate_header";
-  j["protocol"] = "rowloc-estimate/1";
-  j["source"] = source;
-  j["vehicle"] = vehicle;
-  j["origin"] = OriginJson(origin);
-  out_ << j.dump() << '\n';
-  if (!out_) throw std::runtime_error("estimate log: write failed");
-}
-
-void EstimateLogWriter::Write(const EstimateRecord& r) {
-  const char* type = "estimate";
-  CheckTimeOrder(type, r.time_s, last_time_s_);
-  ordered_json j = MessageStart(type, r.time_s);
-  j["x_m"] = Finite(type, "x_m", r.position_m.x());
-  j["y_m"] = Finite(type, "y_m", r.position_m.y());
-  if (r.heading_rad) j["phi_rad"] = Finite(type, "phi_rad", *r.heading_rad);
-  if (r.covariance) {
-    const int n = r.heading_rad ? 3 : 2;
-    const Eigen::MatrixXd c = r.covariance->topLeftCorner(n, n);
-    if (!c.allFinite()) Refuse(type, "covariance is not finite");
-    if (!c.isApprox(c.transpose(), 1e-12) && (c - c.transpose()).norm() > 1e-15) {
-      Refuse(type, "covariance is not symmetric");
-    }
-    // Positive semi-definite up to round-off (an estimate's covariance; NEES needs it).
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 * (c + c.transpose()), Eigen::EigenvaluesOnly);
-    if (eigen.eigenvalues().minCoeff() < -1e-12 * std::max(1.0, eigen.eigenvalues().cwiseAbs().maxCoeff())) {
-      Refuse(type, "covariance is not positive semi-definite");
-    }
-    ordered_json values = ordered_json::array();
-    for (int row = 0; row < n; ++row)
-      for (int col = 0; col < n; ++col) values.push_back(c(row, col));
-    j["covariance_xy_phi"] = values;
-  }
-  if (!r.slip.empty()) {
-    ordered_json slip = ordered_json::object();
-    for (const auto& [wheel, value] : r.slip) {
-      if (wheel.empty() || slip.contains(wheel)) Refuse(type, "slip wheel names must be unique and non-empty");
-      slip[wheel] = Finite(type, "slip", value);
-    }
-    j["slip"] = slip;
-  }
-  if (!r.wheel_calibration.empty()) j["wheel_calibration"] = CalibrationJson(type, r.wheel_calibration);
-  out_ << j.dump() << '\n';
-  if (!out_) throw std::runtime_error("estimate log: write failed");
-  last_time_s_ = r.time_s;
-}
-
-void EstimateLogWriter::WriteUpdate(const UpdateLogRecord& r) {
-  const char* type = "update";
-  CheckTimeOrder(type, r.time_s, last_time_s_);
-  const Eigen::Index m = r.innovation.size();
-  if (r.sensor.empty()) Refuse(type, "sensor name is empty");
-  if (m == 0 || r.innovation_covariance.rows() != m || r.innovation_covariance.cols() != m) {
-    Refuse(type, "innovation and innovation_covariance sizes do not match");
-  }
-  if (!r.innovation.allFinite() || !r.innovation_covariance.allFinite()) Refuse(type, "innovation is not finite");
-  ordered_json j = MessageStart(type, r.time_s);
-  j["sensor"] = r.sensor;
-  j["innovation"] = std::vector<double>(r.innovation.data(), r.innovation.data() + m);
-  ordered_json s = ordered_json::array();
-  for (Eigen::Index row = 0; row < m; ++row)
-    for (Eigen::Index col = 0; col < m; ++col) s.push_back(r.innovation_covariance(row, col));
-  j["innovation_covariance"] = s;
-  j["nis"] = Finite(type, "nis", r.nis);
-  j["accepted"] = r.accepted;
-  out_ << j.dump() << '\n';
-  if (!out_) throw std::runtime_error("estimate log: write failed");
-  last_time_s_ = r.time_s;
 }
 
 }  // namespace rowloc::sim

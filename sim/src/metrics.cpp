@@ -56,7 +56,7 @@ std::map<std::string, double> InterpolateWheels(const std::map<std::string, doub
 }
 }  // namespace
 
-TruthState InterpolateTruth(const TruthStream& truth, double t_s) {
+TruthState InterpolateTruth(const formats::TruthStream& truth, double t_s) {
   const auto& samples = truth.samples;
   if (samples.empty()) throw EvaluationError(truth.source_name + ": the truth stream has no truth samples");
   if (!(t_s >= samples.front().t_s && t_s <= samples.back().t_s)) {
@@ -65,19 +65,19 @@ TruthState InterpolateTruth(const TruthStream& truth, double t_s) {
                           " (estimates are not extrapolated)");
   }
   const auto after = std::upper_bound(samples.begin(), samples.end(), t_s,
-                                      [](double t, const TruthSample& s) { return t < s.t_s; });
+                                      [](double t, const formats::TruthSample& s) { return t < s.t_s; });
   TruthState out;
   out.t_s = t_s;
   if (after == samples.end()) {  // t_s == last time
-    const TruthSample& last = samples.back();
+    const formats::TruthSample& last = samples.back();
     out.position_m = last.position_m;
     out.phi_rad = WrapAngle(last.phi_rad);
     out.wheel_slip = last.wheel_slip;
     out.wheel_rolling_radius_m = last.wheel_rolling_radius_m;
     return out;
   }
-  const TruthSample& s1 = *after;
-  const TruthSample& s0 = *(after - 1);  // exists: t_s >= front().t_s and s1.t_s > t_s
+  const formats::TruthSample& s1 = *after;
+  const formats::TruthSample& s0 = *(after - 1);  // exists: t_s >= front().t_s and s1.t_s > t_s
   const double s = (t_s - s0.t_s) / (s1.t_s - s0.t_s);
   out.position_m = s0.position_m + s * (s1.position_m - s0.position_m);
   out.phi_rad = WrapAngle(s0.phi_rad + s * WrapAngle(s1.phi_rad - s0.phi_rad));
@@ -99,8 +99,8 @@ Eigen::Vector2d AlongDirection(const Eigen::Vector2d& true_position_m, double tr
 namespace {
 
 /// NEES and its dof for one estimate (nullopt without covariance).
-void FillConsistency(const EstimateSample& est, const Eigen::Vector2d& error_m, std::optional<double> heading_rad,
-                     const Eigen::Vector2d& u, PoseError& out) {
+void FillConsistency(const formats::EstimateSample& est, const Eigen::Vector2d& error_m,
+                     std::optional<double> heading_rad, const Eigen::Vector2d& u, PoseError& out) {
   if (!est.covariance) return;
   const Eigen::MatrixXd& p = *est.covariance;
   const Eigen::Matrix2d pxy = p.topLeftCorner<2, 2>();
@@ -124,11 +124,11 @@ void FillConsistency(const EstimateSample& est, const Eigen::Vector2d& error_m, 
 
 }  // namespace
 
-std::vector<PoseError> ComputePoseErrors(const TruthStream& truth, const EstimateStream& estimates,
+std::vector<PoseError> ComputePoseErrors(const formats::TruthStream& truth, const formats::EstimateStream& estimates,
                                          const std::optional<geometry::SegmentIndex>& rows) {
   std::vector<PoseError> out;
   out.reserve(estimates.estimates.size());
-  for (const EstimateSample& est : estimates.estimates) {
+  for (const formats::EstimateSample& est : estimates.estimates) {
     TruthState state;
     try {
       state = InterpolateTruth(truth, est.t_s);
@@ -203,7 +203,7 @@ ConsistencySummary SummarizeConsistency(const std::vector<double>& values, const
   return s;
 }
 
-std::vector<DriftInterval> DriftAfterFixLoss(const TruthStream& truth, const std::vector<PoseError>& errors,
+std::vector<DriftInterval> DriftAfterFixLoss(const formats::TruthStream& truth, const std::vector<PoseError>& errors,
                                              double min_duration_s) {
   std::vector<DriftInterval> out;
   const auto& samples = truth.samples;
@@ -234,9 +234,10 @@ std::vector<DriftInterval> DriftAfterFixLoss(const TruthStream& truth, const std
   return out;
 }
 
-std::vector<WheelSlipError> CompareWheelSlip(const TruthStream& truth, const EstimateStream& estimates) {
+std::vector<WheelSlipError> CompareWheelSlip(const formats::TruthStream& truth,
+                                             const formats::EstimateStream& estimates) {
   std::map<std::string, std::vector<double>> diffs;
-  for (const EstimateSample& est : estimates.estimates) {
+  for (const formats::EstimateSample& est : estimates.estimates) {
     if (est.wheel_slip.empty()) continue;
     const TruthState state = InterpolateTruth(truth, est.t_s);
     for (const auto& [wheel, slip] : est.wheel_slip) {
@@ -250,7 +251,7 @@ std::vector<WheelSlipError> CompareWheelSlip(const TruthStream& truth, const Est
   return out;
 }
 
-EvaluationResult Evaluate(const TruthStream& truth, const EstimateStream& estimates,
+EvaluationResult Evaluate(const formats::TruthStream& truth, const formats::EstimateStream& estimates,
                           const EvaluationOptions& options) {
   if (estimates.estimates.empty()) {
     throw EvaluationError(estimates.source_name + ": the estimate stream has no estimate lines");

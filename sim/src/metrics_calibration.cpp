@@ -3,18 +3,18 @@
 
 namespace rowloc::sim {
 
-std::vector<RollingRadiusError> CompareRollingRadius(const TruthStream& truth, const EstimateStream& estimates,
-                                                     double probability) {
+std::vector<RollingRadiusError> CompareRollingRadius(const formats::TruthStream& truth,
+                                                     const formats::EstimateStream& estimates, double probability) {
   struct Samples {
     std::vector<double> errors_m;
     std::vector<double> nees;
     RollingRadiusError result;
   };
   std::map<std::string, Samples> wheels;
-  for (const EstimateSample& est : estimates.estimates) {
+  for (const formats::EstimateSample& est : estimates.estimates) {
     if (est.wheel_calibration.empty()) continue;
     const TruthState state = InterpolateTruth(truth, est.t_s);
-    for (const WheelCalibrationRecord& c : est.wheel_calibration) {
+    for (const formats::WheelCalibrationRecord& c : est.wheel_calibration) {
       const auto it = state.wheel_rolling_radius_m.find(c.wheel);
       if (it == state.wheel_rolling_radius_m.end()) continue;
       Samples& w = wheels[c.wheel];

@@ -49,15 +49,16 @@ WhitenessResult InnovationWhiteness(const std::vector<Eigen::VectorXd>& whitened
 
 namespace {
 
-SensorInnovationResult AnalyzeSensor(const std::string& sensor, const std::vector<const UpdateRecord*>& records,
-                                     std::size_t max_lag, double probability) {
+SensorInnovationResult AnalyzeSensor(const std::string& sensor,
+                                     const std::vector<const formats::UpdateRecord*>& records, std::size_t max_lag,
+                                     double probability) {
   SensorInnovationResult r;
   r.sensor = sensor;
   r.update_count = records.size();
   std::vector<double> accepted_nis;
   std::vector<int> accepted_dofs;
   std::vector<Eigen::VectorXd> whitened;
-  for (const UpdateRecord* u : records) {
+  for (const formats::UpdateRecord* u : records) {
     const double nis = u->innovation.dot(u->innovation_covariance.ldlt().solve(u->innovation));
     const double rel = std::abs(nis - u->nis) / std::max(std::abs(nis), 1e-300);
     r.max_nis_relative_difference = std::max(r.max_nis_relative_difference, rel);
@@ -84,10 +85,10 @@ SensorInnovationResult AnalyzeSensor(const std::string& sensor, const std::vecto
 
 }  // namespace
 
-std::vector<SensorInnovationResult> AnalyzeInnovations(const std::vector<UpdateRecord>& updates,
+std::vector<SensorInnovationResult> AnalyzeInnovations(const std::vector<formats::UpdateRecord>& updates,
                                                        std::size_t max_lag, double probability) {
-  std::map<std::string, std::vector<const UpdateRecord*>> by_sensor;
-  for (const UpdateRecord& u : updates) by_sensor[u.sensor].push_back(&u);
+  std::map<std::string, std::vector<const formats::UpdateRecord*>> by_sensor;
+  for (const formats::UpdateRecord& u : updates) by_sensor[u.sensor].push_back(&u);
   std::vector<SensorInnovationResult> out;
   for (const auto& [sensor, records] : by_sensor) out.push_back(AnalyzeSensor(sensor, records, max_lag, probability));
   return out;

@@ -79,32 +79,32 @@ std::string RowsData(const geometry::RowMap& map) {
   return out.str();
 }
 
-std::string TruthData(const TruthStream& truth, double t0, double t1) {
+std::string TruthData(const formats::TruthStream& truth, double t0, double t1) {
   std::ostringstream out;
   out << "# t_s x_m y_m phi_rad (truth over the estimates' span)\n";
-  for (const TruthSample& s : truth.samples) {
+  for (const formats::TruthSample& s : truth.samples) {
     if (s.t_s < t0 || s.t_s > t1) continue;
     out << Val(s.t_s) << ' ' << Val(s.position_m.x()) << ' ' << Val(s.position_m.y()) << ' ' << Val(s.phi_rad) << '\n';
   }
   return out.str();
 }
 
-std::string EstimateData(const EstimateStream& est) {
+std::string EstimateData(const formats::EstimateStream& est) {
   std::ostringstream out;
   out << "# t_s x_m y_m phi_rad\n";
-  for (const EstimateSample& s : est.estimates) {
+  for (const formats::EstimateSample& s : est.estimates) {
     out << Val(s.t_s) << ' ' << Val(s.position_m.x()) << ' ' << Val(s.position_m.y()) << ' ' << Val(s.phi_rad) << '\n';
   }
   return out.str();
 }
 
 /// k-sigma ellipses of the position covariance, one block each; count returned through `count`.
-std::string EllipseData(const EstimateStream& est, const PlotOptions& o, std::size_t& count) {
+std::string EllipseData(const formats::EstimateStream& est, const PlotOptions& o, std::size_t& count) {
   std::ostringstream out;
   out << "# x_m y_m: " << Val(o.k_sigma) << "-sigma position ellipses, one block each\n";
   std::optional<double> next_t;
   count = 0;
-  for (const EstimateSample& s : est.estimates) {
+  for (const formats::EstimateSample& s : est.estimates) {
     if (!s.covariance || (next_t && s.t_s < *next_t)) continue;
     const Eigen::LLT<Eigen::Matrix2d> llt(s.covariance->topLeftCorner<2, 2>());
     if (llt.info() != Eigen::Success) continue;  // singular: no ellipse
@@ -179,10 +179,10 @@ std::string Terminal(const std::string& svg, int width, int height) {
 
 /// Plot ranges around the estimates (and the rows): equal axes, each span at least a quarter of
 /// the other plus 1 m, so that a straight run does not give gnuplot an extreme aspect ratio.
-std::string TrajectoryRanges(const EstimateStream& est, const std::optional<geometry::RowMap>& map) {
+std::string TrajectoryRanges(const formats::EstimateStream& est, const std::optional<geometry::RowMap>& map) {
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo;
-  for (const EstimateSample& s : est.estimates) {
+  for (const formats::EstimateSample& s : est.estimates) {
     lo = lo.cwiseMin(s.position_m);
     hi = hi.cwiseMax(s.position_m);
   }
@@ -260,8 +260,9 @@ void PlotOptions::Validate() const {
   if (histogram_bins < 1) throw std::invalid_argument("plot histogram_bins must be >= 1");
 }
 
-PlotFiles WritePlotFiles(const EvaluationResult& result, const TruthStream& truth, const EstimateStream& estimates,
-                         const std::optional<geometry::RowMap>& map, const std::filesystem::path& directory,
+PlotFiles WritePlotFiles(const EvaluationResult& result, const formats::TruthStream& truth,
+                         const formats::EstimateStream& estimates, const std::optional<geometry::RowMap>& map,
+                         const std::filesystem::path& directory,
                          const PlotOptions& options) {
   options.Validate();
   std::error_code ec;

@@ -8,11 +8,11 @@ namespace {
 
 using Reader = mapio::detail::JsonObjectReader<SensorConfigError>;
 
-GnssFixQuality ParseFixQuality(Reader& reader, const std::string& key) {
+formats::GnssFixQuality ParseFixQuality(Reader& reader, const std::string& key) {
   const std::string text = reader.String(key);
-  if (text == "sbas") return GnssFixQuality::kSbas;
-  if (text == "rtk_float") return GnssFixQuality::kRtkFloat;
-  if (text == "rtk_fixed") return GnssFixQuality::kRtkFixed;
+  if (text == "sbas") return formats::GnssFixQuality::kSbas;
+  if (text == "rtk_float") return formats::GnssFixQuality::kRtkFloat;
+  if (text == "rtk_fixed") return formats::GnssFixQuality::kRtkFixed;
   reader.Fail(reader.Key(key), "must be one of \"sbas\", \"rtk_float\", \"rtk_fixed\", got \"" + text + "\"");
 }
 
@@ -128,7 +128,7 @@ GnssConfig DefaultGnssRtkConfig() {
   c.sigma_horizontal_m = 0.01;
   c.sigma_vertical_m = 0.02;
   c.canopy_sigma_gain = 4.0;
-  c.nominal_fix = GnssFixQuality::kRtkFixed;
+  c.nominal_fix = formats::GnssFixQuality::kRtkFixed;
   c.dropout = {0.001, 0.05, 5.0};
   c.multipath = {0.002, 0.02, 3.0};
   c.multipath_offset_min_m = 0.05;
@@ -142,7 +142,7 @@ GnssConfig DefaultGnssSbasConfig() {
   c.sigma_horizontal_m = 0.6;
   c.sigma_vertical_m = 1.0;
   c.canopy_sigma_gain = 1.0;
-  c.nominal_fix = GnssFixQuality::kSbas;
+  c.nominal_fix = formats::GnssFixQuality::kSbas;
   c.dropout = {0.0005, 0.02, 3.0};
   c.multipath = {0.002, 0.02, 5.0};
   c.multipath_offset_min_m = 0.5;

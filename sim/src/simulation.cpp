@@ -60,23 +60,25 @@ SimulationRun::SimulationRun(const Scenario& scenario, const SimulationOutputs& 
       ultrasonic_.emplace_back(scenario.ultrasonic->params, StreamSeed(seed, kUltrasonicStreamBase + i));
     }
   }
-  const LogHeader header = MakeHeader();
+  const formats::LogHeader header = MakeHeader();
   sensor_log_ = std::make_unique<SensorLogWriter>(*outputs.sensors, header);
   truth_log_ = std::make_unique<TruthLogWriter>(*outputs.truth, header);
   if (outputs.baseline_gnss != nullptr) {
-    gnss_baseline_ = std::make_unique<EstimateLogWriter>(*outputs.baseline_gnss, "baseline-gnss",
-                                                         scenario.vehicle.name, scenario.origin);
+    gnss_baseline_ = std::make_unique<formats::EstimateLogWriter>(*outputs.baseline_gnss, "baseline-gnss",
+                                                                  scenario.vehicle.name, scenario.origin);
   }
   if (outputs.baseline_odometry != nullptr) {
-    odometry_baseline_ = std::make_unique<EstimateLogWriter>(*outputs.baseline_odometry, "baseline-odometry",
-                                                             scenario.vehicle.name, scenario.origin);
+    odometry_baseline_ = std::make_unique<formats::EstimateLogWriter>(
+        *outputs.baseline_odometry, "baseline-odometry", scenario.vehicle.name, scenario.origin);
     const VehicleTruth start = truth_.At(0.0);
     dead_reckoning_.emplace(scenario.vehicle, PlanarPose{0.0, start.route.position_m, start.route.heading_rad});
   }
 }
 
-LogHeader SimulationRun::MakeHeader() const {
-  LogHeader header;
+formats::LogHeader SimulationRun::MakeHeader() const {
+  formats::LogHeader header;
+  header.protocol = "rowloc/1";
+  header.source = "rowloc simulate";
   header.scenario = scenario_.name;
   header.vehicle = scenario_.vehicle.name;
   header.origin = scenario_.origin;

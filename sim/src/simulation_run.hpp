@@ -1,6 +1,8 @@
 // The state of one simulation run (private to sim/src; the model is stated in simulation.hpp).
 #pragma once
 
+#include "rowloc/formats/estimate_stream_writer.hpp"
+#include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/sim/canopy_cover.hpp"
 #include "rowloc/sim/dead_reckoning.hpp"
@@ -50,7 +52,7 @@ class SimulationRun {
   void SampleUltrasonic(std::size_t sensor, double time_s);
   void WriteTruth(double time_s);
   std::vector<Clock> MakeClocks() const;
-  LogHeader MakeHeader() const;
+  formats::LogHeader MakeHeader() const;
 
   const Scenario& scenario_;
   SimulationOutputs outputs_;
@@ -72,7 +74,7 @@ class SimulationRun {
 
   std::unique_ptr<SensorLogWriter> sensor_log_;
   std::unique_ptr<TruthLogWriter> truth_log_;
-  std::unique_ptr<EstimateLogWriter> gnss_baseline_, odometry_baseline_;
+  std::unique_ptr<formats::EstimateLogWriter> gnss_baseline_, odometry_baseline_;
   std::optional<DeadReckoning> dead_reckoning_;
 
   // Latest states shared between streams.

@@ -33,7 +33,7 @@ void SimulationRun::SampleGnss(double time_s) {
   GpsMessage message;
   message.time_s = time_s;
   message.sensor = antenna.name;
-  message.fix = sample.has_fix ? sample.fix : GnssFixQuality::kNone;
+  message.fix = sample.has_fix ? sample.fix : formats::GnssFixQuality::kNone;
   if (sample.has_fix) {
     const geometry::GeoOrigin geodetic = frame_.ToGeodetic(sample.position_m);
     message.latitude_deg = geodetic.latitude_deg;
@@ -53,8 +53,9 @@ void SimulationRun::SampleGnss(double time_s) {
     const double heading = dead_reckoning_ ? dead_reckoning_->pose().heading_rad : 0.0;
     const Eigen::Vector2d lever = dead_reckoning_ ? Eigen::Rotation2Dd(heading) * antenna.position_m.head<2>()
                                                   : Eigen::Vector2d::Zero();
-    gnss_baseline_->Write(EstimateRecord{time_s, sample.position_m.head<2>() - lever, std::nullopt,
-                                         Eigen::Vector3d(variance, variance, 0.0).asDiagonal().toDenseMatrix(), {}, {}});
+    const Eigen::Matrix3d covariance = Eigen::Vector3d(variance, variance, 0.0).asDiagonal().toDenseMatrix();
+    gnss_baseline_->Write(
+        formats::EstimateRecord{time_s, sample.position_m.head<2>() - lever, std::nullopt, covariance, {}, {}});
   }
 }
 
@@ -116,7 +117,8 @@ void SimulationRun::SampleWheels(double time_s) {
   ++summary_.wheels;
   if (dead_reckoning_) {
     const PlanarPose pose = dead_reckoning_->AddWheelSpeeds(time_s, readings);
-    odometry_baseline_->Write(EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}, {}});
+    odometry_baseline_->Write(
+        formats::EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}, {}});
   }
 }
 

@@ -548,15 +548,15 @@ namespace {
 
 TEST(GpsSigma, FloorOfTheFixQualityBoundsTheReceiversClaim) {
   const GpsNoise noise;  // floors 5 mm (RTK fixed), 5 cm (float), 0.3 m (SBAS), scale 1
-  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFixed, 0.001), 0.005);
-  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFixed, 0.02), 0.02);
-  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kRtkFloat, 0.01), 0.05);
-  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kSbas, 0.1), 0.3);
-  EXPECT_DOUBLE_EQ(GpsSigma(noise, GnssFixQuality::kSbas, 0.8), 0.8);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, formats::GnssFixQuality::kRtkFixed, 0.001), 0.005);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, formats::GnssFixQuality::kRtkFixed, 0.02), 0.02);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, formats::GnssFixQuality::kRtkFloat, 0.01), 0.05);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, formats::GnssFixQuality::kSbas, 0.1), 0.3);
+  EXPECT_DOUBLE_EQ(GpsSigma(noise, formats::GnssFixQuality::kSbas, 0.8), 0.8);
   GpsNoise scaled = noise;
   scaled.sigma_scale = 2.0;
-  EXPECT_DOUBLE_EQ(GpsSigma(scaled, GnssFixQuality::kRtkFixed, 0.01), 0.02);
-  EXPECT_THROW(GpsSigma(noise, GnssFixQuality::kNone, 0.01), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(GpsSigma(scaled, formats::GnssFixQuality::kRtkFixed, 0.01), 0.02);
+  EXPECT_THROW(GpsSigma(noise, formats::GnssFixQuality::kNone, 0.01), std::invalid_argument);
 }
 
 }  // namespace

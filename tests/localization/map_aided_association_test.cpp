@@ -3,14 +3,14 @@
 // VehicleEkf on both sides of its threshold, and the twelve-seed failures they were made for
 // (vineyard-002-4us seed 3: a heading locked 0.2-0.4 rad off; vineyard-002-north-4us seed 5: the
 // far side of a canopy taken for the near one), replayed from the simulator.
+#include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
-#include "rowloc/localization/sensor_log_reader.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -152,7 +152,7 @@ VehicleEkf FilterAt(double y, double phi, double position_sigma_m, double headin
 
 /// The outcome of one echo of the front-left ranger (0.5 m left of the centre line) at t = 1.01 s.
 std::string EchoOutcome(VehicleEkf& ekf, double range_m) {
-  const ProcessResult r = ekf.Process(UltrasonicMessage{1.01, "us_front_left", 0, range_m});
+  const ProcessResult r = ekf.Process(formats::UltrasonicMessage{1.01, "us_front_left", 0, range_m});
   return r.echo ? r.echo->outcome : "no trace";
 }
 
@@ -207,19 +207,19 @@ RunResult SimulateAndReplay(const std::string& scenario, int seed, double durati
   const geometry::RowMap map = world.TrueRowMap(parsed.row_map_height_m, world.StepForTolerance(1e-3));
   std::stringstream sensors, truth_text;
   sim::RunSimulation(parsed, {&sensors, &truth_text, nullptr, nullptr});
-  const sim::TruthStream truth = sim::ParseTruthStream(truth_text, "truth");
-  std::map<long, const sim::TruthSample*> by_ms;
+  const formats::TruthStream truth = formats::ParseTruthStream(truth_text, "truth");
+  std::map<long, const formats::TruthSample*> by_ms;
   for (const auto& s : truth.samples) by_ms[std::lround(s.t_s * 1000)] = &s;
-  SensorLogReader reader(sensors, "sensors");
+  formats::SensorLogReader reader(sensors, "sensors");
   VehicleEkf ekf(parsed.vehicle, FilterConfig{}, reader.header().origin, reader.header().wheels);
   ekf.AttachRowMap(map);
   RunResult result;
   std::optional<double> initialised_at;
   while (const auto m = reader.Next()) {
-    if (TimeOf(*m) > duration_s) break;
+    if (formats::TimeOf(*m) > duration_s) break;
     ekf.Process(*m);
     if (ekf.initialised() && !initialised_at) initialised_at = ekf.time_s();
-    const auto it = by_ms.find(std::lround(TimeOf(*m) * 1000));
+    const auto it = by_ms.find(std::lround(formats::TimeOf(*m) * 1000));
     if (!initialised_at || ekf.time_s() < *initialised_at + 30.0 || it == by_ms.end()) continue;
     const Eigen::Vector2d error = ekf.state().head<2>() - it->second->position_m.head<2>();
     result.max_position_error_m = std::max(result.max_position_error_m, error.norm());

@@ -26,8 +26,8 @@ void AddGaussMarkovFixErrors(const VehicleConfig& v, Drive& d, unsigned seed, do
   Eigen::Vector2d bias(n01(rng), n01(rng));  // stationary from the start
   double previous_t = 0.0;
   std::size_t fix = 0;
-  for (SensorMessage& m : d.messages) {
-    auto* gps = std::get_if<GpsMessage>(&m);
+  for (formats::SensorMessage& m : d.messages) {
+    auto* gps = std::get_if<formats::GpsMessage>(&m);
     if (!gps) continue;
     const double a = std::exp(-(gps->time_s - previous_t) / 10.0);
     bias = a * bias + std::sqrt(1.0 - a * a) * Eigen::Vector2d(n01(rng), n01(rng));
@@ -43,9 +43,9 @@ double MeanPositionNees(VehicleEkf& ekf, const Drive& d, double from_s) {
   double sum = 0.0;
   int count = 0;
   std::size_t fix = 0;
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     ekf.Process(m);
-    if (!std::holds_alternative<GpsMessage>(m)) continue;
+    if (!std::holds_alternative<formats::GpsMessage>(m)) continue;
     const Sample& truth = d.truth.at(fix++);
     if (!ekf.initialised() || truth.t < from_s) continue;
     const Eigen::Vector2d e = ekf.state().head<2>() - truth.pose.p;
@@ -61,7 +61,7 @@ TEST(VehicleEkfGnssBias, APositionFromAFixCarriesTheBias) {
   const FilterConfig config = BiasConfig(true);
   VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
   const Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, {{10.0, 1.0, 0.0, 0.0}});
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     ekf.Process(m);
     if (ekf.initialised()) break;
   }
@@ -111,7 +111,7 @@ TEST(VehicleEkfGnssBias, SetPoseLeavesTheBiasButNotItsCorrelationWithThePose) {
   VehicleEkf ekf(v, BiasConfig(true), kOrigin, WheelNames(v));
   Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, {{20.0, 1.0, 0.0, 0.0}});
   AddGaussMarkovFixErrors(v, d, 7, 0.3);
-  for (const SensorMessage& m : d.messages) ekf.Process(m);
+  for (const formats::SensorMessage& m : d.messages) ekf.Process(m);
   const int b = ekf.layout().gnss_bias;
   const Eigen::Vector2d bias = ekf.state().segment<2>(b);
   EXPECT_GT(bias.norm(), 0.0);
@@ -139,7 +139,7 @@ TEST(VehicleEkfGnssBias, TheSmootherRecordsTheBiasDecayAndTheIteratedWheelUpdate
     AddGaussMarkovFixErrors(v, d, 3, 0.3);
     ekf.EnableSmoothing(/*check_transitions=*/true);
     double next_mark_s = 0.0;
-    for (const SensorMessage& m : d.messages) {
+    for (const formats::SensorMessage& m : d.messages) {
       ekf.Process(m);
       if (ekf.initialised() && ekf.time_s() >= next_mark_s) {
         ekf.MarkForSmoothing();

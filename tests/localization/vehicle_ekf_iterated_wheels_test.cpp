@@ -25,7 +25,7 @@ OneUpdate UpdateFromRest(int iterations, const VehicleConfig& v, FilterConfig& c
   ekf.SetPose(1.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
   OneUpdate u{ekf.state(), {}, ekf.covariance(), {}, {}, {}};
   const std::vector<double> speeds(v.wheels.size(), 5.0);
-  ekf.Process(WheelsMessage{1.0, speeds, std::nullopt, std::nullopt});
+  ekf.Process(formats::WheelsMessage{1.0, speeds, std::nullopt, std::nullopt});
   u.x = ekf.state();
   u.p = ekf.covariance();
   u.z = Eigen::Map<const Eigen::VectorXd>(speeds.data(), static_cast<Eigen::Index>(speeds.size()));
@@ -85,7 +85,7 @@ TEST(VehicleEkfIteratedWheels, OnNearExactReadingsTheIterationsChangeTheTrackByM
   config.wheels.speed_update_iterations = 3;
   VehicleEkf iterated(v, config, kOrigin, WheelNames(v));
   double max_difference_m = 0.0;
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     ekf.Process(m);
     iterated.Process(m);
     if (ekf.initialised()) {

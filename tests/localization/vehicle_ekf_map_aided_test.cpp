@@ -1,13 +1,13 @@
 // VehicleEkf with a row map (issue 5): the map-aided ultrasonic update end to end on a short
 // deterministic simulator run (one lane of the seed-002 vineyard), per method, and the input
 // contract of AttachRowMap and of ultrasonic messages.
-#include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 #include "test_support.hpp"
 
 #include <gmock/gmock.h>
@@ -28,7 +28,7 @@ struct SimRun {
   sim::Scenario scenario;
   geometry::RowMap map;
   std::string sensors;
-  sim::TruthStream truth;
+  formats::TruthStream truth;
 };
 
 /// vineyard-002-4us cut to its first lane (about 130 s): same world, vehicle, sensors and seed.
@@ -44,7 +44,7 @@ const SimRun& OneLaneRun() {
     std::stringstream sensors, truth;
     sim::RunSimulation(r.scenario, {&sensors, &truth, nullptr, nullptr});
     r.sensors = sensors.str();
-    r.truth = sim::ParseTruthStream(truth, "truth");
+    r.truth = formats::ParseTruthStream(truth, "truth");
     return r;
   }();
   return run;
@@ -64,19 +64,19 @@ struct Errors {
 /// (rows along +x: across = y, along = x).
 Errors Replay(const SimRun& run, const FilterConfig& config, bool with_map) {
   std::istringstream log(run.sensors);
-  SensorLogReader reader(log, "sensors");
+  formats::SensorLogReader reader(log, "sensors");
   VehicleEkf ekf(run.scenario.vehicle, config, reader.header().origin, reader.header().wheels);
   if (with_map) ekf.AttachRowMap(run.map);
-  std::map<long, const sim::TruthSample*> by_ms;
+  std::map<long, const formats::TruthSample*> by_ms;
   for (const auto& s : run.truth.samples) by_ms[std::lround(s.t_s * 1000)] = &s;
   Errors e;
   std::optional<double> init_time;
   while (const auto m = reader.Next()) {
     for (const UpdateRecord& u : ekf.Process(*m).updates) e.ultrasonic_accepted += u.sensor == "ultrasonic" && u.outcome.accepted;
     if (ekf.initialised() && !init_time) init_time = ekf.time_s();
-    const auto it = by_ms.find(std::lround(TimeOf(*m) * 1000));
+    const auto it = by_ms.find(std::lround(formats::TimeOf(*m) * 1000));
     if (!init_time || ekf.time_s() < *init_time + 20.0 || it == by_ms.end()) continue;
-    const sim::TruthSample& truth = *it->second;
+    const formats::TruthSample& truth = *it->second;
     if (truth.position_m.x() < 2.0 || truth.position_m.x() > 48.0) continue;  // in the lane only
     const Eigen::Vector3d error(ekf.state()(0) - truth.position_m.x(), ekf.state()(1) - truth.position_m.y(),
                                 WrapAngle(ekf.state()(2) - truth.phi_rad));
@@ -180,30 +180,31 @@ TEST(VehicleEkfMapAided, AttachRowMapRejectsEmptyMapsAndVehiclesWithoutRangers) 
 TEST(VehicleEkfMapAided, UnknownRangerIsAnInputErrorOnlyWithAMap) {
   const mapio::VehicleConfig ugv = mapio::VineyardUgv4wsConfig();
   VehicleEkf ekf(ugv, FilterConfig{}, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
-  const UltrasonicMessage stranger{1.0, "us_roof", 0, 0.8};
+  const formats::UltrasonicMessage stranger{1.0, "us_roof", 0, 0.8};
   EXPECT_NO_THROW(ekf.Process(stranger));  // without a map echoes are not used
   ekf.AttachRowMap(OneRow());
   try {
-    ekf.Process(UltrasonicMessage{2.0, "us_roof", 0, 0.8});
+    ekf.Process(formats::UltrasonicMessage{2.0, "us_roof", 0, 0.8});
     ADD_FAILURE() << "an unknown ranger was accepted";
   } catch (const FilterInputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("'us_roof' is not an ultrasonic sensor"));
   }
-  EXPECT_THROW(ekf.Process(UltrasonicMessage{3.0, "us_front_left", 0, std::nan("")}), FilterInputError);
-  EXPECT_THROW(ekf.Process(UltrasonicMessage{3.0, "us_front_left", 0, -0.2}), FilterInputError);
+  EXPECT_THROW(ekf.Process(formats::UltrasonicMessage{3.0, "us_front_left", 0, std::nan("")}), FilterInputError);
+  EXPECT_THROW(ekf.Process(formats::UltrasonicMessage{3.0, "us_front_left", 0, -0.2}), FilterInputError);
 }
 
 TEST(VehicleEkfMapAided, EchoesUpdateOnlyAnInitialisedFilterAndNoEchoIsNoMeasurement) {
   const mapio::VehicleConfig ugv = mapio::VineyardUgv4wsConfig();
   VehicleEkf ekf(ugv, FilterConfig{}, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
   ekf.AttachRowMap(OneRow());
-  EXPECT_TRUE(ekf.Process(UltrasonicMessage{0.5, "us_front_left", 0, 0.4}).updates.empty());  // not initialised
+  // Not initialised:
+  EXPECT_TRUE(ekf.Process(formats::UltrasonicMessage{0.5, "us_front_left", 0, 0.4}).updates.empty());
   EXPECT_EQ(ekf.map_aided_stats().echoes, 0u);
   // Vehicle at y = 0.1 heading +x: the left rangers (y = 0.5 in the body) are 0.4 m from the row at y = 1.
   ekf.SetPose(1.0, Eigen::Vector3d(10.0, 0.12, 0.0), Eigen::Vector3d(0.01, 0.01, 1e-4).asDiagonal());
-  EXPECT_TRUE(ekf.Process(UltrasonicMessage{1.01, "us_front_left", 0, std::nullopt}).updates.empty());
+  EXPECT_TRUE(ekf.Process(formats::UltrasonicMessage{1.01, "us_front_left", 0, std::nullopt}).updates.empty());
   EXPECT_EQ(ekf.map_aided_stats().echoes, 0u);
-  const ProcessResult r = ekf.Process(UltrasonicMessage{1.02, "us_front_left", 0, 0.4});
+  const ProcessResult r = ekf.Process(formats::UltrasonicMessage{1.02, "us_front_left", 0, 0.4});
   ASSERT_EQ(r.updates.size(), 1u);
   EXPECT_EQ(r.updates[0].sensor, "ultrasonic");
   EXPECT_TRUE(r.updates[0].outcome.accepted);
@@ -220,7 +221,7 @@ TEST(VehicleEkfMapAided, EchoesUpdateOnlyAnInitialisedFilterAndNoEchoIsNoMeasure
   ASSERT_TRUE(r.echo->segment.has_value() && r.echo->line.has_value());
   EXPECT_NEAR(r.echo->line->normal.y(), -1.0, 1e-12);  // the row at y = 1, normal towards the sensor
   // A right ranger looking away from the only row: no segment in its cone.
-  const ProcessResult away = ekf.Process(UltrasonicMessage{1.03, "us_front_right", 1, 0.4});
+  const ProcessResult away = ekf.Process(formats::UltrasonicMessage{1.03, "us_front_right", 1, 0.4});
   EXPECT_TRUE(away.updates.empty());
   ASSERT_TRUE(away.echo.has_value());
   EXPECT_EQ(away.echo->outcome, "no_segment");
@@ -236,11 +237,11 @@ TEST(VehicleEkfMapAided, TheRangerIsFoundByNameWhateverTheHeaderIndex) {
   VehicleEkf ekf(ugv, FilterConfig{}, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
   ekf.AttachRowMap(OneRow());
   ekf.SetPose(1.0, Eigen::Vector3d(10.0, 0.12, 0.0), Eigen::Vector3d(0.01, 0.01, 1e-4).asDiagonal());
-  const ProcessResult wrong_hint = ekf.Process(UltrasonicMessage{1.01, "us_front_right", 0, 0.4});
+  const ProcessResult wrong_hint = ekf.Process(formats::UltrasonicMessage{1.01, "us_front_right", 0, 0.4});
   ASSERT_TRUE(wrong_hint.echo.has_value());
   EXPECT_EQ(wrong_hint.echo->sensor, "us_front_right");
   EXPECT_EQ(wrong_hint.echo->outcome, "no_segment");  // the right ranger looks away from the row
-  const ProcessResult beyond = ekf.Process(UltrasonicMessage{1.02, "us_front_left", 9, 0.4});
+  const ProcessResult beyond = ekf.Process(formats::UltrasonicMessage{1.02, "us_front_left", 9, 0.4});
   ASSERT_EQ(beyond.updates.size(), 1u);
   EXPECT_TRUE(beyond.updates[0].outcome.accepted);  // the left ranger's geometry: 0.38 m predicted
   EXPECT_NEAR(beyond.updates[0].outcome.innovation(0), 0.4 - 0.38, 1e-9);

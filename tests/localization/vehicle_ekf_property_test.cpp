@@ -28,19 +28,21 @@ TEST(VehicleEkfAccuracy, SimulatedAgrimaroTiles) {
   const sim::Scenario scenario = sim::LoadScenario(test::SourceDir() / "config/scenarios/agrimaro-tiles.json");
   std::stringstream sensors, truth_text;
   sim::RunSimulation(scenario, {&sensors, &truth_text, nullptr, nullptr});
-  const sim::TruthStream truth = sim::ParseTruthStream(truth_text, "truth");
-  std::map<long, const sim::TruthSample*> by_ms;
+  const formats::TruthStream truth = formats::ParseTruthStream(truth_text, "truth");
+  std::map<long, const formats::TruthSample*> by_ms;
   for (const auto& s : truth.samples) by_ms[std::lround(s.t_s * 1000)] = &s;
-  SensorLogReader reader(sensors, "sensors");
+  formats::SensorLogReader reader(sensors, "sensors");
   VehicleEkf ekf(scenario.vehicle, FilterConfig{}, reader.header().origin, reader.header().wheels);
   std::optional<double> init_time;
   int compared = 0;
   double worst_position = 0.0, worst_heading = 0.0;
   while (const auto m = reader.Next()) {
     ekf.Process(*m);
-    if (ekf.initialised() && !init_time) init_time = TimeOf(*m);
-    if (!init_time || TimeOf(*m) < *init_time + 3.0 || !std::holds_alternative<GpsMessage>(*m)) continue;
-    const auto it = by_ms.find(std::lround(TimeOf(*m) * 1000));
+    if (ekf.initialised() && !init_time) init_time = formats::TimeOf(*m);
+    if (!init_time || formats::TimeOf(*m) < *init_time + 3.0 || !std::holds_alternative<formats::GpsMessage>(*m)) {
+      continue;
+    }
+    const auto it = by_ms.find(std::lround(formats::TimeOf(*m) * 1000));
     if (it == by_ms.end()) continue;
     ++compared;
     worst_position = std::max(worst_position, (ekf.state().head<2>() - it->second->position_m).norm());
@@ -90,7 +92,7 @@ TEST(VehicleEkfProperty, CovarianceStaysSymmetricPositiveDefinite) {
     const bool hostile = u01(rng) < 0.2 && (!kQuietAfterGap || t > last_gap + 1.0);
     const Pose truth = Advance(start, drive, t);
     Readings exact = Exact(v, drive, t);
-    SensorMessage m;
+    formats::SensorMessage m;
     const double kind = u01(rng);
     if (kind < 0.15) {
       const Eigen::Vector2d antenna = truth.p + Rotate(truth.phi, v.gnss_antenna.position_m.head<2>());
@@ -98,7 +100,7 @@ TEST(VehicleEkfProperty, CovarianceStaysSymmetricPositiveDefinite) {
       const double error = hostile && u01(rng) < 0.5 ? log_uniform(1.0, 1e4) : sigma * n01(rng);
       m = Fix(frame, t, antenna + error * Eigen::Vector2d(std::cos(angle), std::sin(angle)), sigma);
     } else if (kind < 0.45) {
-      ImuMessage& imu = exact.imu;
+      formats::ImuMessage& imu = exact.imu;
       imu.accel_x_mps2 += hostile ? uniform(-1e3, 1e3) : 0.02 * n01(rng);
       imu.accel_y_mps2 += hostile ? uniform(-1e3, 1e3) : 0.02 * n01(rng);
       imu.gyro_z_radps += hostile ? uniform(-10, 10) : 0.002 * n01(rng);
@@ -119,18 +121,19 @@ TEST(VehicleEkfProperty, CovarianceStaysSymmetricPositiveDefinite) {
     } else if (kind < 0.97) {
       const double sigma = hostile ? log_uniform(1e-6, 1e4) : log_uniform(0.005, 0.5);
       const double spread = hostile && u01(rng) < 0.5 ? 100.0 : sigma;
-      m = VioMessage{t, "camera", drive.vx + spread * n01(rng), drive.vy + spread * n01(rng), sigma};
+      m = formats::VioMessage{t, "camera", drive.vx + spread * n01(rng), drive.vy + spread * n01(rng), sigma};
     } else {
-      m = UltrasonicMessage{t, "us", 0, u01(rng) < 0.5 ? std::optional<double>(uniform(0.1, 5.0)) : std::nullopt};
+      const std::optional<double> range_m = u01(rng) < 0.5 ? std::optional<double>(uniform(0.1, 5.0)) : std::nullopt;
+      m = formats::UltrasonicMessage{t, "us", 0, range_m};
     }
     if (u01(rng) < 0.03) {  // a non-finite value: must be rejected, the filter unchanged
       std::visit([&](auto& msg) {
         using T = std::decay_t<decltype(msg)>;
-        if constexpr (std::is_same_v<T, GpsMessage>) msg.position->longitude_deg = kNaN;
-        else if constexpr (std::is_same_v<T, ImuMessage>) msg.gyro_z_radps = kNaN;
-        else if constexpr (std::is_same_v<T, WheelsMessage>) msg.speed_radps.back() = -kInf;
-        else if constexpr (std::is_same_v<T, SteeringMessage>) msg.angle_rad.front() = kNaN;
-        else if constexpr (std::is_same_v<T, VioMessage>) msg.sigma_mps = kNaN;
+        if constexpr (std::is_same_v<T, formats::GpsMessage>) msg.position->longitude_deg = kNaN;
+        else if constexpr (std::is_same_v<T, formats::ImuMessage>) msg.gyro_z_radps = kNaN;
+        else if constexpr (std::is_same_v<T, formats::WheelsMessage>) msg.speed_radps.back() = -kInf;
+        else if constexpr (std::is_same_v<T, formats::SteeringMessage>) msg.angle_rad.front() = kNaN;
+        else if constexpr (std::is_same_v<T, formats::VioMessage>) msg.sigma_mps = kNaN;
         else msg.time_s = kNaN;
       }, m);
       const Snapshot before = Snap(ekf);

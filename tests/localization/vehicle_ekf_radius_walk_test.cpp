@@ -24,15 +24,15 @@ RadiusAfter DriveWithoutFixes(FilterConfig config, double duration_s) {
   Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, {{duration_s, 0.5, 0.0, 0.0}}, 0.0, 7);
   std::mt19937_64 rng(11);
   std::normal_distribution<double> wheel_noise(0.0, config.wheels.speed_sigma_radps);
-  for (SensorMessage& m : d.messages) {
-    if (auto* wheels = std::get_if<WheelsMessage>(&m)) {
+  for (formats::SensorMessage& m : d.messages) {
+    if (auto* wheels = std::get_if<formats::WheelsMessage>(&m)) {
       for (double& w : wheels->speed_radps) w += wheel_noise(rng);
     }
   }
   VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
   ekf.SetPose(0.0, {0.0, 0.0, 0.0}, Eigen::Matrix3d::Identity() * 1e-4);
-  for (const SensorMessage& m : d.messages) {
-    if (!std::holds_alternative<GpsMessage>(m)) ekf.Process(m);
+  for (const formats::SensorMessage& m : d.messages) {
+    if (!std::holds_alternative<formats::GpsMessage>(m)) ekf.Process(m);
   }
   const StateLayout& layout = ekf.layout();
   RadiusAfter r{0.0, 0.0, v.wheels.front().nominal_radius_m};

@@ -10,8 +10,8 @@ namespace {
 /// Removes the GNSS fixes in [from_s, to_s) (and their truth samples).
 void DropFixes(Drive& d, double from_s, double to_s) {
   const auto in_outage = [&](double t) { return t >= from_s && t < to_s; };
-  std::erase_if(d.messages, [&](const SensorMessage& m) {
-    return std::holds_alternative<GpsMessage>(m) && in_outage(TimeOf(m));
+  std::erase_if(d.messages, [&](const formats::SensorMessage& m) {
+    return std::holds_alternative<formats::GpsMessage>(m) && in_outage(formats::TimeOf(m));
   });
   std::erase_if(d.truth, [&](const Sample& s) { return in_outage(s.t); });
 }
@@ -44,7 +44,7 @@ SmoothingRun Smooth(VehicleEkf& ekf, const Drive& d, double mark_from_s = 0.0) {
   ekf.EnableSmoothing(/*check_transitions=*/true);
   SmoothingRun run;
   double next_mark_s = mark_from_s;
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     ekf.Process(m);
     if (!ekf.initialised() || ekf.time_s() < next_mark_s) continue;
     EXPECT_EQ(ekf.MarkForSmoothing(), run.filtered.size());
@@ -123,15 +123,15 @@ TEST(VehicleEkfSmoothing, WheelAnglesAndTractionStatesAreRecorded) {
   const VehicleConfig v = mapio::DifferentialDriveConfig();
   Drive d = MakeDrive(v, {{0.0, 0.0}, 0.0}, StraightThenCircle(), 0.0, 7, /*torque=*/true);
   AddWheelAngles(d);
-  for (SensorMessage& m : d.messages) {
-    auto* wheels = std::get_if<WheelsMessage>(&m);
+  for (formats::SensorMessage& m : d.messages) {
+    auto* wheels = std::get_if<formats::WheelsMessage>(&m);
     if (wheels && wheels->time_s >= 12.0) wheels->torque_nm = std::vector<double>(v.wheels.size(), 6.0);
   }
   VehicleEkf ekf(v, config, kOrigin, WheelNames(v));
   std::size_t reanchored = 0;
   ekf.EnableSmoothing(true);
   double next_mark_s = 0.0;
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     const ProcessResult r = ekf.Process(m);
     for (const UpdateRecord& u : r.updates) reanchored += u.sensor == "torque" && !u.outcome.accepted;
     if (ekf.initialised() && ekf.time_s() >= next_mark_s) {
@@ -151,7 +151,7 @@ TEST(VehicleEkfSmoothing, RecordingChangesNothingInTheFilter) {
   const Drive d = MakeDrive(v, {{0.0, 0.0}, 0.3}, StraightThenCircle(), 0.0, 9);
   VehicleEkf plain = MakeEkf(v, true), recording = MakeEkf(v, true);
   recording.EnableSmoothing();
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     plain.Process(m);
     recording.Process(m);
     if (recording.initialised()) recording.MarkForSmoothing();
@@ -171,7 +171,7 @@ TEST(VehicleEkfSmoothing, SetPoseAndReinitialisationAreRecorded) {
     EXPECT_EQ(ekf.MarkForSmoothing(), marks);
     ++marks;
   };
-  for (const SensorMessage& m : first.messages) {
+  for (const formats::SensorMessage& m : first.messages) {
     ekf.Process(m);
     if (ekf.initialised()) mark();
   }
@@ -181,7 +181,7 @@ TEST(VehicleEkfSmoothing, SetPoseAndReinitialisationAreRecorded) {
   const double restart_s = 8.0 + config.max_prediction_gap_s + 1.0;
   const Drive second = MakeDrive(v, {{20.0, 0.0}, 0.0}, {{8.0, 1.0, 0.0, 0.0}}, restart_s, 13);
   bool reinitialised = false;
-  for (const SensorMessage& m : second.messages) {
+  for (const formats::SensorMessage& m : second.messages) {
     const ProcessResult r = ekf.Process(m);
     reinitialised = reinitialised || (r.notice && r.notice->find("initialised") != std::string::npos);
     if (ekf.initialised()) mark();

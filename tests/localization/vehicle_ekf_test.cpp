@@ -7,6 +7,19 @@
 namespace rowloc::localization {
 namespace {
 
+// The sensor messages (rowloc::formats) appear in almost every test of this file.
+using formats::GnssFixQuality;
+using formats::GpsMessage;
+using formats::GpsPosition;
+using formats::ImuMessage;
+using formats::SensorMessage;
+using formats::SteeringMessage;
+using formats::TimeOf;
+using formats::TypeOf;
+using formats::UltrasonicMessage;
+using formats::VioMessage;
+using formats::WheelsMessage;
+
 TEST(VehicleEkfConstruction, RejectsBadWheelOrderConfigAndOrigin) {
   const VehicleConfig v = mapio::AgrimaroSwerveConfig();
   const FilterConfig c;
@@ -206,6 +219,29 @@ TEST(VehicleEkfInput, UnusedFieldsAndHugeSigmasAreRejected) {
   EXPECT_TRUE(e.state().allFinite() && e.covariance().allFinite());
 }
 
+// Finite values no sensor produces are refused too: a torque of 1e300 once made the covariance NaN
+// (found by the service's hostile-message test), a GPS altitude of 1e308 aborted a replay.
+TEST(VehicleEkfInput, ImpossibleMagnitudesAreRejected) {
+  Rig rig(mapio::AgrimaroSwerveConfig());
+  VehicleEkf& e = rig.ekf;
+  const auto with = [&](auto m, auto mutate) { mutate(m); return SensorMessage(m); };
+  for (const double huge : {1e300, -1e300}) {
+    ExpectRejected(e, with(rig.Wheels(), [&](WheelsMessage& m) { (*m.torque_nm)[0] = huge; }), "torque_nm", "torque");
+    ExpectRejected(e, with(rig.Gps(), [&](GpsMessage& m) { m.position->altitude_m = huge; }), "altitude_m", "alt");
+    ExpectRejected(e, with(rig.Imu(), [&](ImuMessage& m) { m.accel_x_mps2 = huge; }), "accel_x_mps2", "ax");
+    ExpectRejected(e, with(rig.Imu(), [&](ImuMessage& m) { m.accel_y_mps2 = huge; }), "accel_y_mps2", "ay");
+    ExpectRejected(e, with(rig.Imu(), [&](ImuMessage& m) { m.gyro_z_radps = huge; }), "gyro_z_radps", "gyro");
+    ExpectRejected(e, with(rig.Vio(), [&](VioMessage& m) { m.velocity_x_mps = huge; }), "velocity_x_mps", "vx");
+  }
+  UltrasonicMessage u = rig.Ultrasonic();
+  u.range_m = 1e300;
+  ExpectRejected(e, u, "range_m", "range");
+  WheelsMessage w = rig.Wheels();
+  (*w.torque_nm)[0] = 9e4;  // large but possible
+  EXPECT_NO_THROW(e.Process(w));
+  EXPECT_TRUE(e.state().allFinite() && e.covariance().allFinite());
+}
+
 // ---------------------------------------------------------------------------------------------
 TEST(VehicleEkfGap, LongGapDropsTheStateAndReinitialises) {
   const VehicleConfig v = mapio::DifferentialDriveConfig();
@@ -384,6 +420,9 @@ TEST(VehicleEkfInput, SteeringAngleThroughPiIsTracked) {
 
 namespace rowloc::localization {
 namespace {
+
+using formats::SensorMessage;
+using formats::WheelsMessage;
 
 // ProjectStates keeps the slip compliance in its domain after every message: kappa >= 0 and
 // kappa mu <= max_model_slip for the last traction coefficient mu = T / (N r) > 0, so the odometer

@@ -3,13 +3,13 @@
 // file includes it once (anonymous namespace: one private copy per test executable).
 #pragma once
 
+#include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/localization/measurement_models.hpp"
-#include "rowloc/localization/sensor_log_reader.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 #include "test_support.hpp"
 
 #include <Eigen/Cholesky>
@@ -70,7 +70,7 @@ Pose Advance(const Pose& a, const Segment& s, double t) {
 }
 
 /// Exact imu, steering and wheels readings at time t on a constant-twist segment.
-struct Readings { ImuMessage imu; SteeringMessage steering; WheelsMessage wheels; };
+struct Readings { formats::ImuMessage imu; formats::SteeringMessage steering; formats::WheelsMessage wheels; };
 Readings Exact(const VehicleConfig& v, const Segment& s, double t) {
   const Eigen::Vector2d l = v.imu.position_m.head<2>();
   Readings r{{t, "imu", -s.r * s.vy - s.r * s.r * l.x(), s.r * s.vx - s.r * s.r * l.y(), s.r}, {t, {}}, {t, {}, {}, {}}};
@@ -87,15 +87,16 @@ bool Steers(const VehicleConfig& v) {
   return v.kind == mapio::VehicleKind::kSwerveDrive || v.kind == mapio::VehicleKind::kFourWheelSteer;
 }
 
-GpsMessage Fix(const mapio::LocalFrame& frame, double t, const Eigen::Vector2d& antenna, double sigma) {
+formats::GpsMessage Fix(const mapio::LocalFrame& frame, double t, const Eigen::Vector2d& antenna, double sigma) {
   const geometry::GeoOrigin g = frame.ToGeodetic({antenna.x(), antenna.y(), 0.0});
-  return {t, "gnss", GnssFixQuality::kRtkFixed, GpsPosition{g.latitude_deg, g.longitude_deg, g.altitude_m, sigma, 0.02}};
+  return {t, "gnss", formats::GnssFixQuality::kRtkFixed,
+          formats::GpsPosition{g.latitude_deg, g.longitude_deg, g.altitude_m, sigma, 0.02}};
 }
 
 /// Messages of a noisy drive: every 0.01 s imu, steering (steerable vehicles), wheels; a GNSS fix
 /// (1 cm RTK noise) every 0.1 s first at each instant. `truth` gets the pose at every fix.
 struct Drive {
-  std::vector<SensorMessage> messages;
+  std::vector<formats::SensorMessage> messages;
   std::vector<Sample> truth;
 };
 
@@ -136,8 +137,8 @@ constexpr double kTickRad = 2.0 * kPi / 1024.0;
 /// speeds over the 0.01 s sample period, counted in whole ticks of 2 pi / 1024.
 [[maybe_unused]] void AddWheelAngles(Drive& drive) {
   std::vector<double> rolled;
-  for (SensorMessage& m : drive.messages) {
-    auto* wheels = std::get_if<WheelsMessage>(&m);
+  for (formats::SensorMessage& m : drive.messages) {
+    auto* wheels = std::get_if<formats::WheelsMessage>(&m);
     if (!wheels) continue;
     rolled.resize(wheels->speed_radps.size(), 0.0);
     std::vector<double> angles;
@@ -166,7 +167,8 @@ bool BitIdentical(const Snapshot& a, const Snapshot& b) {
 }
 
 /// Requires a FilterInputError naming `field` and an unchanged filter.
-[[maybe_unused]] void ExpectRejected(VehicleEkf& ekf, const SensorMessage& m, const std::string& field, const std::string& what) {
+[[maybe_unused]] void ExpectRejected(VehicleEkf& ekf, const formats::SensorMessage& m, const std::string& field,
+                                     const std::string& what) {
   SCOPED_TRACE(what);
   const Snapshot before = Snap(ekf);
   try {
@@ -192,10 +194,10 @@ struct WorstErrors {
                                          const std::function<void(const ProcessResult&)>& on_result = {}) {
   WorstErrors worst;
   std::size_t fix = 0;
-  for (const SensorMessage& m : d.messages) {
+  for (const formats::SensorMessage& m : d.messages) {
     const ProcessResult r = ekf.Process(m);
     if (on_result) on_result(r);
-    if (!std::holds_alternative<GpsMessage>(m)) continue;
+    if (!std::holds_alternative<formats::GpsMessage>(m)) continue;
     const Sample& truth = d.truth[fix++];
     if (truth.t < settle_s) continue;
     worst.position_m = std::max(worst.position_m, (ekf.state().head<2>() - truth.pose.p).norm());

@@ -1,11 +1,11 @@
 // VehicleEkf on a tracked vehicle in a turn (docs/localization-filter.md §5.8): the simulator's
 // tracked-circle-gnss-loss run (two laps of a 5 m circle, no GNSS after 40 s) replayed with the
 // turning resistance in the tracks' traction, and without it (mu_t = 0 in the vehicle file).
-#include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
@@ -21,7 +21,7 @@ namespace {
 struct CircleRun {
   sim::Scenario scenario;
   std::string sensors;
-  sim::TruthStream truth;
+  formats::TruthStream truth;
 };
 
 CircleRun Simulate(std::optional<std::uint64_t> seed) {
@@ -30,7 +30,7 @@ CircleRun Simulate(std::optional<std::uint64_t> seed) {
   std::stringstream sensors, truth;
   sim::RunSimulation(r.scenario, {&sensors, &truth, nullptr, nullptr});
   r.sensors = sensors.str();
-  r.truth = sim::ParseTruthStream(truth, "truth");
+  r.truth = formats::ParseTruthStream(truth, "truth");
   return r;
 }
 
@@ -47,7 +47,7 @@ struct Outcome {
 
 Outcome Replay(const mapio::VehicleConfig& vehicle, const CircleRun& run = Circle()) {
   std::istringstream log(run.sensors);
-  SensorLogReader reader(log, "sensors");
+  formats::SensorLogReader reader(log, "sensors");
   VehicleEkf ekf(vehicle, FilterConfig{}, reader.header().origin, reader.header().wheels);
   Outcome o;
   while (const auto m = reader.Next()) {
@@ -57,7 +57,7 @@ Outcome Replay(const mapio::VehicleConfig& vehicle, const CircleRun& run = Circl
     }
     for (const int k : ekf.layout().slip_compliance) o.slip_compliance_in_domain &= ekf.state()(k) >= 0.0;
   }
-  const sim::TruthSample& end = run.truth.samples.back();
+  const formats::TruthSample& end = run.truth.samples.back();
   EXPECT_NEAR(ekf.time_s(), end.t_s, 0.05);
   o.final_error_m = (ekf.state().head<2>() - end.position_m).norm();
   return o;

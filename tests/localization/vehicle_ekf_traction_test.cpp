@@ -16,7 +16,7 @@ FilterConfig TractionConfig() {
 struct Driving {
   VehicleConfig v = mapio::DifferentialDriveConfig();
   VehicleEkf ekf{v, TractionConfig(), kOrigin, WheelNames(v)};
-  WheelsMessage Wheels(double t, double torque_nm) const {
+  formats::WheelsMessage Wheels(double t, double torque_nm) const {
     const double speed = 0.5 / v.wheels[0].nominal_radius_m;
     return {t, {speed, speed}, std::vector<double>{torque_nm, torque_nm}, std::nullopt};
   }
@@ -96,7 +96,8 @@ TEST(VehicleEkfTraction, NoisyTorquesNoLongerPullKappaDown) {
       const mapio::LocalFrame frame(kOrigin);
       if (k % 5 == 0) ekf.Process(Fix(frame, t, {0.5 * t + v.gnss_antenna.position_m.x(), 0.0}, 0.01));
       const double torque = mu * scale + 0.05 * n01(rng);
-      ekf.Process(WheelsMessage{t, {speed, speed}, std::vector<double>{torque, torque + 0.05 * n01(rng)}, std::nullopt});
+      const std::vector<double> torques{torque, torque + 0.05 * n01(rng)};
+      ekf.Process(formats::WheelsMessage{t, {speed, speed}, torques, std::nullopt});
     }
     return ekf.state()(ekf.layout().slip_compliance[0]);
   };

@@ -67,7 +67,7 @@ struct Rolling {
   }
   VehicleConfig v = mapio::DifferentialDriveConfig();
   VehicleEkf ekf;
-  WheelsMessage Wheels(double t, double angle_rad) const {
+  formats::WheelsMessage Wheels(double t, double angle_rad) const {
     const double speed = 1.0 / v.wheels[0].nominal_radius_m;
     return {t, {speed, speed}, std::nullopt, std::vector<double>{angle_rad, angle_rad}};
   }
@@ -125,7 +125,7 @@ TEST(VehicleEkfWheelAngles, UntilTheRatesAreKnownTheSpeedsAreUsed) {
 TEST(VehicleEkfWheelAngles, AMessageWithoutAnglesIsUsedAsSpeeds) {
   Rolling r;
   r.ekf.Process(r.Wheels(0.02, 0.0));
-  WheelsMessage speeds_only = r.Wheels(0.04, 0.0);
+  formats::WheelsMessage speeds_only = r.Wheels(0.04, 0.0);
   speeds_only.angle_rad.reset();
   const ProcessResult result = r.ekf.Process(speeds_only);
   ASSERT_FALSE(result.updates.empty());
@@ -137,7 +137,7 @@ TEST(VehicleEkfWheelAngles, AMessageWithoutAnglesIsUsedAsSpeeds) {
 TEST(VehicleEkfWheelAngles, AtRestTheSpeedsAreUsed) {
   Rolling r;
   r.ekf.Process(r.Wheels(0.02, 5.0));
-  WheelsMessage still = r.Wheels(0.04, 5.0);
+  formats::WheelsMessage still = r.Wheels(0.04, 5.0);
   still.speed_radps = {0.0, 0.0};
   ProcessResult result = r.ekf.Process(still);
   ASSERT_FALSE(result.updates.empty());
@@ -145,7 +145,7 @@ TEST(VehicleEkfWheelAngles, AtRestTheSpeedsAreUsed) {
   still.time_s = 0.06;
   result = r.ekf.Process(still);
   EXPECT_EQ(result.updates.front().sensor, "wheels");
-  WheelsMessage one_tick = still;
+  formats::WheelsMessage one_tick = still;
   one_tick.time_s = 0.08;
   (*one_tick.angle_rad)[1] += kTickRad;  // one wheel ticks
   result = r.ekf.Process(one_tick);
@@ -170,7 +170,7 @@ TEST(VehicleEkfWheelAngles, AGatedOutUpdateReanchorsAndSaysSo) {
 
 TEST(VehicleEkfWheelAngles, BadAnglesAreRejected) {
   Rolling r;
-  WheelsMessage bad = r.Wheels(0.02, 1.0);
+  formats::WheelsMessage bad = r.Wheels(0.02, 1.0);
   bad.angle_rad->back() = kNaN;
   ExpectRejected(r.ekf, bad, "angle_rad", "NaN angle");
   bad.angle_rad = std::vector<double>{1.0};
@@ -209,7 +209,7 @@ TEST(VehicleEkfWheelAngles, CovarianceStaysSymmetricPositiveDefinite) {
     const double t = ekf.time_s() + (u01(rng) < 0.05 ? 0.2 * u01(rng) : 0.02 * u01(rng));
     Readings exact = Exact(v, drive, t);
     const bool hostile = u01(rng) < 0.1;
-    SensorMessage m;
+    formats::SensorMessage m;
     if (u01(rng) < 0.4) {
       exact.imu.accel_x_mps2 += 0.02 * n01(rng);
       exact.imu.gyro_z_radps += 0.002 * n01(rng);

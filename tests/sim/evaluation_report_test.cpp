@@ -29,8 +29,8 @@ std::string ReadAll(const std::filesystem::path& p) {
 }
 
 struct Fixture {
-  TruthStream truth;
-  EstimateStream estimates;
+  formats::TruthStream truth;
+  formats::EstimateStream estimates;
   EvaluationResult result;
   ReportInputs inputs;
 };
@@ -38,8 +38,8 @@ struct Fixture {
 Fixture EvaluateShippedFixture() {
   const auto dir = test::SourceDir() / "tests/data/evaluate";
   Fixture f;
-  f.truth = ReadTruthStream(dir / "truth.ndjson");
-  f.estimates = ReadEstimateStream(dir / "estimates.ndjson");
+  f.truth = formats::ReadTruthStream(dir / "truth.ndjson");
+  f.estimates = formats::ReadEstimateStream(dir / "estimates.ndjson");
   f.result = Evaluate(f.truth, f.estimates, {});
   f.inputs = {"truth.ndjson", "estimates.ndjson", "", f.estimates.updates.size(), 0, 0};
   return f;
@@ -69,11 +69,11 @@ TEST(ReportText, HasEverySectionAndAlignedTables) {
 }
 
 TEST(ReportText, SaysWhatIsNotReported) {
-  TruthStream truth;
-  truth.samples = {TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {}, 2},
-                   TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {}, 3}};
-  EstimateStream est;
-  est.estimates = {EstimateSample{0.5, {0.5, 0.1}, std::nullopt, std::nullopt, {}, {}, 2}};
+  formats::TruthStream truth;
+  truth.samples = {formats::TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {}, 2},
+                   formats::TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {}, 3}};
+  formats::EstimateStream est;
+  est.estimates = {formats::EstimateSample{0.5, {0.5, 0.1}, std::nullopt, std::nullopt, {}, {}, 2}};
   const std::string text = FormatReportText(Evaluate(truth, est, {}), {});
   EXPECT_THAT(text, HasSubstr("heading: not reported"));
   EXPECT_THAT(text, HasSubstr("NEES: not reported"));
@@ -84,12 +84,13 @@ TEST(ReportText, SaysWhatIsNotReported) {
 }
 
 TEST(Report, RollingRadiusSectionInTextAndJson) {
-  TruthStream truth;
-  truth.samples = {TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 2},
-                   TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 3}};
-  EstimateStream est;
+  formats::TruthStream truth;
+  truth.samples = {formats::TruthSample{0.0, {0.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 2},
+                   formats::TruthSample{1.0, {1.0, 0.0}, 0.0, true, {}, {{"left", 0.16}}, 3}};
+  formats::EstimateStream est;
   for (int k = 0; k < 4; ++k) {
-    EstimateSample e{0.25 * k, {0.25 * k, 0.0}, std::nullopt, std::nullopt, {}, {}, static_cast<std::size_t>(k + 2)};
+    formats::EstimateSample e{0.25 * k, {0.25 * k, 0.0}, std::nullopt, std::nullopt, {}, {},
+                              static_cast<std::size_t>(k + 2)};
     e.wheel_calibration = {{"left", 0.162, k == 3 ? 0.0 : 0.001, 0.5, 0.1}};
     est.estimates.push_back(e);
   }
@@ -261,7 +262,7 @@ TEST(Plots, EllipseIsTheKSigmaContour) {
   WritePlotFiles(f.result, f.truth, f.estimates, std::nullopt, dir.path(), options);
   std::ifstream in(dir / "ellipses.dat");
   std::string line;
-  const EstimateSample& e = f.estimates.estimates.front();
+  const formats::EstimateSample& e = f.estimates.estimates.front();
   const Eigen::Matrix2d inv = e.covariance->topLeftCorner<2, 2>().inverse();
   std::size_t points = 0;
   while (std::getline(in, line)) {
@@ -304,7 +305,7 @@ TEST(Plots, GnuplotDrawsNonEmptySvgsEvenInADirectoryWithAQuote) {
 
 TEST(Plots, SensorNamesCannotInjectGnuplotCommands) {
   Fixture f = EvaluateShippedFixture();
-  for (UpdateRecord& u : f.estimates.updates) u.sensor = "g'ps\nsystem 'touch injected'";
+  for (formats::UpdateRecord& u : f.estimates.updates) u.sensor = "g'ps\nsystem 'touch injected'";
   f.result = Evaluate(f.truth, f.estimates, {});
   test::ScratchDir dir;
   const PlotFiles files = WritePlotFiles(f.result, f.truth, f.estimates, std::nullopt, dir.path());
@@ -320,7 +321,7 @@ TEST(Plots, SensorNamesCannotInjectGnuplotCommands) {
 TEST(Plots, GnuplotCopesWithoutCovarianceHeadingOrUpdates) {
   if (!FindExecutableOnPath("gnuplot")) GTEST_SKIP() << "gnuplot is not on PATH";
   Fixture f = EvaluateShippedFixture();
-  for (EstimateSample& e : f.estimates.estimates) {
+  for (formats::EstimateSample& e : f.estimates.estimates) {
     e.covariance.reset();
     e.phi_rad.reset();
   }

@@ -41,7 +41,7 @@ GnssConfig NoFaultConfig() {
   c.sigma_horizontal_m = 0.6;
   c.sigma_vertical_m = 1.0;
   c.canopy_sigma_gain = 4.0;
-  c.nominal_fix = GnssFixQuality::kSbas;
+  c.nominal_fix = formats::GnssFixQuality::kSbas;
   c.dropout = {0.0, 0.0, 1.0};
   c.multipath = {0.0, 0.0, 1.0};
   return c;
@@ -170,7 +170,7 @@ TEST(GnssModel, DropoutEpochsReportNoFix) {
   for (int k = 0; k < 1000; ++k) {
     const GnssSample s = model.Measure(0.1 * k, Eigen::Vector3d(1.0, 2.0, 3.0), 0.0);
     EXPECT_EQ(s.has_fix, !s.faults.dropout);
-    EXPECT_EQ(s.fix, s.has_fix ? GnssFixQuality::kSbas : GnssFixQuality::kNone);
+    EXPECT_EQ(s.fix, s.has_fix ? formats::GnssFixQuality::kSbas : formats::GnssFixQuality::kNone);
     dropouts += s.faults.dropout ? 1 : 0;
   }
   EXPECT_GT(dropouts, 0);
@@ -281,7 +281,7 @@ TEST(GnssModel, RejectsInvalidConfiguration) {
   rejects([](GnssConfig& c) { c.sigma_vertical_m = -1.0; });
   rejects([](GnssConfig& c) { c.rate_hz = 0.0; });
   rejects([](GnssConfig& c) { c.canopy_sigma_gain = std::nan(""); });
-  rejects([](GnssConfig& c) { c.nominal_fix = GnssFixQuality::kNone; });
+  rejects([](GnssConfig& c) { c.nominal_fix = formats::GnssFixQuality::kNone; });
   rejects([](GnssConfig& c) { c.dropout.mean_duration_s = 0.0; });
   rejects([](GnssConfig& c) { c.multipath.onset_rate_canopy_per_s = -1.0; });
   rejects([](GnssConfig& c) { c.multipath_offset_max_m = c.multipath_offset_min_m - 0.1; });

@@ -19,8 +19,8 @@ namespace {
 using ::testing::HasSubstr;
 constexpr double kPi = std::numbers::pi;
 
-TruthSample Truth(double t, double x, double y, double phi, bool gnss = true) {
-  TruthSample s;
+formats::TruthSample Truth(double t, double x, double y, double phi, bool gnss = true) {
+  formats::TruthSample s;
   s.t_s = t;
   s.position_m = {x, y};
   s.phi_rad = phi;
@@ -28,8 +28,8 @@ TruthSample Truth(double t, double x, double y, double phi, bool gnss = true) {
   return s;
 }
 
-EstimateSample Estimate(double t, double x, double y, std::optional<double> phi = std::nullopt) {
-  EstimateSample e;
+formats::EstimateSample Estimate(double t, double x, double y, std::optional<double> phi = std::nullopt) {
+  formats::EstimateSample e;
   e.t_s = t;
   e.position_m = {x, y};
   e.phi_rad = phi;
@@ -37,8 +37,8 @@ EstimateSample Estimate(double t, double x, double y, std::optional<double> phi 
 }
 
 /// Straight run along +x at 1 m/s, y = 0, heading 0, samples every second in [0, n - 1].
-TruthStream StraightTruth(int n) {
-  TruthStream t;
+formats::TruthStream StraightTruth(int n) {
+  formats::TruthStream t;
   t.source_name = "truth";
   for (int i = 0; i < n; ++i) t.samples.push_back(Truth(i, i, 0.0, 0.0));
   return t;
@@ -74,7 +74,7 @@ TEST(Summarize, HandComputed) {
 }
 
 TEST(InterpolateTruth, IsLinearAndHeadingTakesTheShortWayRound) {
-  TruthStream t;
+  formats::TruthStream t;
   t.samples = {Truth(0.0, 0.0, 0.0, 3.1), Truth(2.0, 4.0, -2.0, -3.1)};
   t.samples[0].wheel_slip = {{"left", 0.1}, {"right", 0.2}};
   t.samples[1].wheel_slip = {{"left", 0.3}};
@@ -97,23 +97,23 @@ TEST(InterpolateTruth, IsLinearAndHeadingTakesTheShortWayRound) {
 }
 
 TEST(InterpolateTruth, RefusesToExtrapolate) {
-  const TruthStream t = StraightTruth(3);
+  const formats::TruthStream t = StraightTruth(3);
   EXPECT_THROW(InterpolateTruth(t, -0.001), EvaluationError);
   EXPECT_THROW(InterpolateTruth(t, 2.001), EvaluationError);
-  EXPECT_THROW(InterpolateTruth(TruthStream{}, 0.0), EvaluationError);
+  EXPECT_THROW(InterpolateTruth(formats::TruthStream{}, 0.0), EvaluationError);
 }
 
 TEST(InterpolateTruth, HandlesRepeatedTimes) {
-  TruthStream t;
+  formats::TruthStream t;
   t.samples = {Truth(0.0, 0.0, 0.0, 0.0), Truth(1.0, 1.0, 0.0, 0.0), Truth(1.0, 5.0, 0.0, 0.0), Truth(2.0, 6.0, 0.0, 0.0)};
   EXPECT_DOUBLE_EQ(InterpolateTruth(t, 1.5).position_m.x(), 5.5);
   EXPECT_DOUBLE_EQ(InterpolateTruth(t, 0.5).position_m.x(), 0.5);
 }
 
 TEST(PoseErrors, AlongAcrossRelativeToTrueHeadingLeftPositive) {
-  TruthStream truth;
+  formats::TruthStream truth;
   truth.samples = {Truth(0.0, 0.0, 0.0, kPi / 2.0), Truth(1.0, 0.0, 1.0, kPi / 2.0)};  // driving north
-  EstimateStream est;
+  formats::EstimateStream est;
   est.estimates = {Estimate(0.5, -0.1, 0.7, kPi / 2.0 + 0.05)};  // 0.1 m west (left), 0.2 m ahead
   const std::vector<PoseError> e = ComputePoseErrors(truth, est, std::nullopt);
   ASSERT_EQ(e.size(), 1u);
@@ -128,11 +128,11 @@ TEST(PoseErrors, AlongAcrossRelativeToNearestRowOrientedWithTheVehicle) {
   geometry::RowMap map;
   map.rows = {{"r1", {{0.0, 1.0}, {10.0, 1.0}}, false}, {"r2", {{10.0, -1.0}, {0.0, -1.0}}, false}};
   const auto rows = geometry::SegmentIndex::FromRowMap(map);
-  TruthStream truth;
+  formats::TruthStream truth;
   // Near r2 (drawn -x), driving +x with a 0.3 rad heading offset: the reference is +x.
   truth.samples = {Truth(0.0, 5.0, -0.5, 0.3), Truth(1.0, 5.0, -0.5, 0.3),
                    Truth(2.0, 5.0, 0.8, kPi - 0.2), Truth(3.0, 5.0, 0.8, kPi - 0.2)};
-  EstimateStream est;
+  formats::EstimateStream est;
   est.estimates = {Estimate(0.5, 5.2, -0.4), Estimate(2.5, 5.2, 0.9)};
   const std::vector<PoseError> e = ComputePoseErrors(truth, est, rows);
   EXPECT_NEAR(e[0].along_m, 0.2, 1e-12);
@@ -143,14 +143,14 @@ TEST(PoseErrors, AlongAcrossRelativeToNearestRowOrientedWithTheVehicle) {
 }
 
 TEST(PoseErrors, NeesHandComputedForThreeAndTwoDof) {
-  const TruthStream truth = StraightTruth(2);
-  EstimateStream est;
-  EstimateSample full = Estimate(0.0, 0.1, 0.2, 0.05);
+  const formats::TruthStream truth = StraightTruth(2);
+  formats::EstimateStream est;
+  formats::EstimateSample full = Estimate(0.0, 0.1, 0.2, 0.05);
   Eigen::Matrix3d p = Eigen::Vector3d(0.01, 0.04, 0.0025).asDiagonal();
   full.covariance = p;
-  EstimateSample no_heading = Estimate(0.5, 0.6, -0.2);  // 3x3 covariance but no phi: (x, y) only
+  formats::EstimateSample no_heading = Estimate(0.5, 0.6, -0.2);  // 3x3 covariance but no phi: (x, y) only
   no_heading.covariance = p;
-  EstimateSample two = Estimate(1.0, 1.0, 0.3);
+  formats::EstimateSample two = Estimate(1.0, 1.0, 0.3);
   Eigen::Matrix2d p2;
   p2 << 0.02, 0.01, 0.01, 0.02;
   two.covariance = p2;
@@ -170,11 +170,11 @@ TEST(PoseErrors, NeesHandComputedForThreeAndTwoDof) {
 }
 
 TEST(PoseErrors, SingularCovarianceHasNoNeesButIsCounted) {
-  const TruthStream truth = StraightTruth(2);
-  EstimateStream est;
-  EstimateSample known = Estimate(0.0, 0.0, 0.0, 0.0);
+  const formats::TruthStream truth = StraightTruth(2);
+  formats::EstimateStream est;
+  formats::EstimateSample known = Estimate(0.0, 0.0, 0.0, 0.0);
   known.covariance = Eigen::Matrix3d::Zero();
-  EstimateSample fine = Estimate(1.0, 1.0, 0.1, 0.0);
+  formats::EstimateSample fine = Estimate(1.0, 1.0, 0.1, 0.0);
   fine.covariance = Eigen::Matrix3d::Identity();
   est.estimates = {known, fine};
   const EvaluationResult r = Evaluate(truth, est, {});
@@ -187,8 +187,8 @@ TEST(PoseErrors, SingularCovarianceHasNoNeesButIsCounted) {
 }
 
 TEST(PoseErrors, EstimateOutsideTruthNamesItsLine) {
-  const TruthStream truth = StraightTruth(3);
-  EstimateStream est;
+  const formats::TruthStream truth = StraightTruth(3);
+  formats::EstimateStream est;
   est.source_name = "est.ndjson";
   est.estimates = {Estimate(1.0, 1.0, 0.0), Estimate(2.5, 2.5, 0.0)};
   est.estimates[1].line = 7;
@@ -231,16 +231,16 @@ TEST(Consistency, HandComputed) {
 /// Estimates drawn from N(truth, P) with a fixed seed: the NEES must behave like chi2(3).
 TEST(NeesProperty, EstimatesDrawnFromTheirCovarianceAreConsistent) {
   const int n = 4000;
-  const TruthStream truth = StraightTruth(n);
+  const formats::TruthStream truth = StraightTruth(n);
   Eigen::Matrix3d p;
   p << 0.04, 0.01, 0.002, 0.01, 0.09, -0.003, 0.002, -0.003, 0.01;
   const Eigen::Matrix3d l = p.llt().matrixL();
   std::mt19937_64 rng(20261122);
   std::normal_distribution<double> normal;
-  EstimateStream est;
+  formats::EstimateStream est;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d d = l * Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
-    EstimateSample e = Estimate(i, i + d.x(), d.y(), d.z());
+    formats::EstimateSample e = Estimate(i, i + d.x(), d.y(), d.z());
     e.covariance = p;
     est.estimates.push_back(e);
   }
@@ -269,7 +269,7 @@ TEST(NeesProperty, EstimatesDrawnFromTheirCovarianceAreConsistent) {
   }
   test::ExpectBinomialFrequency(runs_inside, runs, 0.95);
   // And an overconfident filter (covariance 4x too small) fails the band.
-  for (EstimateSample& e : est.estimates) e.covariance = p / 4.0;
+  for (formats::EstimateSample& e : est.estimates) e.covariance = p / 4.0;
   EXPECT_FALSE(Evaluate(truth, est, options).nees.mean_inside);
 }
 
@@ -315,9 +315,9 @@ TEST(WhitenessProperty, WhiteNoiseStaysInTheBandAndARandomWalkDoesNot) {
   EXPECT_LT(r.fraction_inside, 0.1);
 }
 
-UpdateRecord Update(double t, const std::string& sensor, Eigen::VectorXd nu, Eigen::MatrixXd s, double nis,
+formats::UpdateRecord Update(double t, const std::string& sensor, Eigen::VectorXd nu, Eigen::MatrixXd s, double nis,
                     bool accepted = true) {
-  UpdateRecord u;
+  formats::UpdateRecord u;
   u.t_s = t;
   u.sensor = sensor;
   u.innovation = std::move(nu);
@@ -330,7 +330,7 @@ UpdateRecord Update(double t, const std::string& sensor, Eigen::VectorXd nu, Eig
 TEST(Innovations, RecomputesNisFlagsMismatchesAndCountsGating) {
   Eigen::Matrix2d s;
   s << 4.0, 0.0, 0.0, 1.0;
-  const std::vector<UpdateRecord> updates = {
+  const std::vector<formats::UpdateRecord> updates = {
       Update(0.0, "gnss", Eigen::Vector2d(2.0, 1.0), s, 2.0),          // 1 + 1: matches
       Update(1.0, "gnss", Eigen::Vector2d(2.0, 0.0), s, 1.0 + 2e-6),   // mismatch 2e-6 relative
       Update(2.0, "gnss", Eigen::Vector2d(20.0, 0.0), s, 100.0, false),
@@ -358,7 +358,7 @@ TEST(Innovations, RecomputesNisFlagsMismatchesAndCountsGating) {
 }
 
 TEST(Drift, IntervalsOfFixLossHandComputed) {
-  TruthStream truth;
+  formats::TruthStream truth;
   for (int i = 0; i <= 30; ++i) {
     const bool gnss = !((i >= 2 && i < 8) || (i >= 10 && i < 13) || i >= 24);
     truth.samples.push_back(Truth(i, i, 0.0, 0.0, gnss));
@@ -387,9 +387,9 @@ TEST(Drift, IntervalsOfFixLossHandComputed) {
 }
 
 TEST(Slip, PerWheelErrorAgainstInterpolatedTruth) {
-  TruthStream truth = StraightTruth(3);
+  formats::TruthStream truth = StraightTruth(3);
   for (auto& s : truth.samples) s.wheel_slip = {{"left", 0.1 * s.t_s}, {"right", 0.05}};
-  EstimateStream est;
+  formats::EstimateStream est;
   est.estimates = {Estimate(0.5, 0.5, 0.0), Estimate(1.5, 1.5, 0.0), Estimate(2.0, 2.0, 0.0)};
   est.estimates[0].wheel_slip = {{"left", 0.08}, {"right", 0.05}, {"spare", 1.0}};
   est.estimates[1].wheel_slip = {{"left", 0.13}};
@@ -405,9 +405,9 @@ TEST(Slip, PerWheelErrorAgainstInterpolatedTruth) {
 }
 
 TEST(RollingRadius, ErrorAndNeesPerWheelAgainstInterpolatedTruth) {
-  TruthStream truth = StraightTruth(3);
+  formats::TruthStream truth = StraightTruth(3);
   for (auto& s : truth.samples) s.wheel_rolling_radius_m = {{"left", 0.16 + 0.01 * s.t_s}, {"right", 0.16}};
-  EstimateStream est;
+  formats::EstimateStream est;
   est.estimates = {Estimate(0.5, 0.5, 0.0), Estimate(1.0, 1.0, 0.0), Estimate(1.5, 1.5, 0.0), Estimate(2.0, 2.0, 0.0)};
   est.estimates[0].wheel_calibration = {{"left", 0.167, 0.001, 1.0, 1.0}, {"spare", 0.2, 0.01, 1.0, 1.0}};
   // the estimate at t = 1.0 carries no calibration
@@ -431,18 +431,18 @@ TEST(RollingRadius, ErrorAndNeesPerWheelAgainstInterpolatedTruth) {
   EXPECT_EQ(right.error_m.count, 1u);
   EXPECT_EQ(right.nees.count, 0u);  // sigma 0: no NEES, counted
   EXPECT_EQ(right.zero_sigma_count, 1u);
-  EXPECT_TRUE(CompareRollingRadius(truth, EstimateStream{}).empty());
+  EXPECT_TRUE(CompareRollingRadius(truth, formats::EstimateStream{}).empty());
 }
 
 // A consistent calibration (errors drawn with the reported sigma) has its mean NEES inside the
 // band; the same draws with a bias of 3 sigma do not.
 TEST(RollingRadius, NeesSeparatesConsistentFromBiasedCalibration) {
-  TruthStream truth = StraightTruth(2);
+  formats::TruthStream truth = StraightTruth(2);
   for (auto& s : truth.samples) s.wheel_rolling_radius_m = {{"left", 0.16}};
   std::mt19937_64 rng(7);
   std::normal_distribution<double> normal(0.0, 1.0);
-  EstimateStream consistent;
-  EstimateStream biased;
+  formats::EstimateStream consistent;
+  formats::EstimateStream biased;
   for (int k = 0; k < 2000; ++k) {
     const double t = k / 2000.0;
     const double sigma = 0.001 * (1.0 + k % 5);
@@ -460,13 +460,13 @@ TEST(RollingRadius, NeesSeparatesConsistentFromBiasedCalibration) {
 }
 
 TEST(Evaluate, RejectsAnEmptyEstimateStream) {
-  EstimateStream est;
+  formats::EstimateStream est;
   est.source_name = "e.ndjson";
   EXPECT_THROW(Evaluate(StraightTruth(3), est, {}), EvaluationError);
 }
 
 TEST(Evaluate, ReportsTheReferenceAndSpan) {
-  EstimateStream est;
+  formats::EstimateStream est;
   est.estimates = {Estimate(0.5, 0.5, 0.1), Estimate(1.5, 1.5, -0.1)};
   const EvaluationResult r = Evaluate(StraightTruth(3), est, {});
   EXPECT_EQ(r.reference, AlongAcrossReference::kTrueHeading);

@@ -58,9 +58,9 @@ TEST(SensorConfig, ShippedFileEqualsInCodeDefaults) {
 
 TEST(SensorConfig, ProfilesHaveTheIssueSigmas) {
   EXPECT_EQ(DefaultGnssRtkConfig().sigma_horizontal_m, 0.01);
-  EXPECT_EQ(DefaultGnssRtkConfig().nominal_fix, GnssFixQuality::kRtkFixed);
+  EXPECT_EQ(DefaultGnssRtkConfig().nominal_fix, formats::GnssFixQuality::kRtkFixed);
   EXPECT_EQ(DefaultGnssSbasConfig().sigma_horizontal_m, 0.6);
-  EXPECT_EQ(DefaultGnssSbasConfig().nominal_fix, GnssFixQuality::kSbas);
+  EXPECT_EQ(DefaultGnssSbasConfig().nominal_fix, formats::GnssFixQuality::kSbas);
 }
 
 TEST(SensorConfig, EveryShippedProfileBuildsItsModel) {

@@ -21,7 +21,7 @@
 // source, the key path and the reason (the same strict reader as the simulator's files).
 #pragma once
 
-#include "rowloc/localization/sensor_messages.hpp"
+#include "rowloc/formats/gnss_fix_quality.hpp"
 
 #include <Eigen/Core>
 
@@ -229,7 +229,7 @@ struct FilterConfig {
 
 /// The horizontal 1-sigma (m) used for a fix of the given quality (kNone: not a fix; throws
 /// std::invalid_argument).
-double GpsSigma(const GpsNoise& noise, GnssFixQuality fix, double receiver_sigma_horizontal_m);
+double GpsSigma(const GpsNoise& noise, formats::GnssFixQuality fix, double receiver_sigma_horizontal_m);
 
 class FilterConfigError : public std::runtime_error {
  public:

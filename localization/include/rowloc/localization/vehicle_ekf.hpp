@@ -27,13 +27,13 @@
 // the fixed-interval smoother (fixed_interval_smoother.hpp); the filter's own results do not change.
 #pragma once
 
+#include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/fixed_interval_smoother.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/measurement_models.hpp"
-#include "rowloc/localization/sensor_messages.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/mapio/local_frame.hpp"
@@ -117,7 +117,7 @@ class VehicleEkf {
              const std::vector<std::string>& wheel_order);
 
   /// Predicts to the message's time and applies it. Throws FilterInputError (filter unchanged).
-  ProcessResult Process(const SensorMessage& message);
+  ProcessResult Process(const formats::SensorMessage& message);
 
   /// Initialises (or overrides) the pose (x, y, phi) with its covariance at time_s; velocities and
   /// the other states keep their values (zero and the initial sigmas when not yet initialised).
@@ -172,17 +172,17 @@ class VehicleEkf {
   const std::vector<double>& last_wheel_speeds_radps() const { return last_speed_radps_; }
 
  private:
-  void Validate(const SensorMessage& message) const;
+  void Validate(const formats::SensorMessage& message) const;
   void PredictTo(double time_s);
-  ProcessResult Apply(const GpsMessage& gps);
-  ProcessResult Apply(const ImuMessage& imu);
-  ProcessResult Apply(const WheelsMessage& wheels);
+  ProcessResult Apply(const formats::GpsMessage& gps);
+  ProcessResult Apply(const formats::ImuMessage& imu);
+  ProcessResult Apply(const formats::WheelsMessage& wheels);
   /// The wheel-angle update of a wheels message with angles (wheel_angle_model.hpp); anchors the
   /// angle states to the message instead when they are not anchored yet or the update is gated out.
   /// Returns false, and the caller uses the speeds, when no wheel ticked since the last message
   /// (the vehicle is at rest; nothing else done) or when a predicted angle's sigma exceeds
   /// wheels.angle_max_prediction_sigma_rad (the angles re-anchored).
-  bool ApplyWheelAngles(const WheelsMessage& wheels, ProcessResult& result);
+  bool ApplyWheelAngles(const formats::WheelsMessage& wheels, ProcessResult& result);
   /// The iterations after the first of the wheel-speed update (wheels.speed_update_iterations).
   void IterateWheelSpeedUpdate(const VectorRef& measured_radps);
   /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
@@ -194,13 +194,13 @@ class VehicleEkf {
   /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
   /// variance, uncorrelated with the other states.
   void AnchorWheelAngles(const Eigen::VectorXd& z);
-  ProcessResult Apply(const SteeringMessage& steering);
-  ProcessResult Apply(const VioMessage& vio);
-  ProcessResult Apply(const UltrasonicMessage& ping);
+  ProcessResult Apply(const formats::SteeringMessage& steering);
+  ProcessResult Apply(const formats::VioMessage& vio);
+  ProcessResult Apply(const formats::UltrasonicMessage& ping);
   /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it; `hint`
   /// (the message's index in the log header, usually the vehicle's order) is tried first.
   std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
-  std::optional<std::string> TryInitialise(const GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
+  std::optional<std::string> TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   /// position_from_gnss: the pose's position is a fix's, so it carries the GNSS bias (if estimated).
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
                        bool position_from_gnss = false);

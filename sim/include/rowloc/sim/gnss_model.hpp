@@ -17,15 +17,14 @@
 // Each sample carries the true fault state (for the validation suite) next to the measurement.
 #pragma once
 
+#include "rowloc/formats/gnss_fix_quality.hpp"
+
 #include <Eigen/Core>
 
 #include <cstdint>
 #include <random>
 
 namespace rowloc::sim {
-
-/// What the receiver says about its solution (NMEA GGA-like quality).
-enum class GnssFixQuality { kNone, kSbas, kRtkFloat, kRtkFixed };
 
 /// Two-state Markov fault process parameters (rates in 1/s, durations in s).
 struct GnssMarkovFaultConfig {
@@ -40,7 +39,7 @@ struct GnssConfig {
   double sigma_horizontal_m = 0.01;      ///< per-axis (east, north) 1-sigma noise in the open
   double sigma_vertical_m = 0.0;         ///< up-axis 1-sigma noise in the open (0: exact)
   double canopy_sigma_gain = 0.0;        ///< g in s(c) = s0 (1 + g c), >= 0
-  GnssFixQuality nominal_fix = GnssFixQuality::kRtkFixed;  ///< reported when a fix exists
+  formats::GnssFixQuality nominal_fix = formats::GnssFixQuality::kRtkFixed;  ///< reported when a fix exists
   GnssMarkovFaultConfig dropout;         ///< outages (no fix)
   GnssMarkovFaultConfig multipath;       ///< constant-offset jumps
   double multipath_offset_min_m = 0.0;   ///< smallest jump magnitude
@@ -63,7 +62,7 @@ struct GnssFaultState {
 struct GnssSample {
   double time_s = 0.0;
   bool has_fix = false;                               ///< false during a dropout
-  GnssFixQuality fix = GnssFixQuality::kNone;
+  formats::GnssFixQuality fix = formats::GnssFixQuality::kNone;
   Eigen::Vector3d position_m = Eigen::Vector3d::Zero();  ///< ENU; undefined (zero) without fix
   double sigma_horizontal_m = 0.0;                    ///< noise sigma actually used (canopy law)
   double sigma_vertical_m = 0.0;

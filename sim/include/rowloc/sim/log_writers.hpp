@@ -1,17 +1,22 @@
-// Writers of the three NDJSON streams of docs/protocol.md: the sensor log (§1), the ground-truth
-// stream (§2) and the estimate stream (§3, written here for the simulator's baseline estimators).
+// Writers of the simulator's two NDJSON streams of docs/protocol.md: the sensor log (§1) and the
+// ground-truth stream (§2). The estimate stream (§3) of the baseline estimators is written by
+// rowloc/formats/estimate_stream_writer.hpp; both share the helpers of rowloc/formats/ndjson_writing.hpp.
 //
 // One JSON object per line, keys in the documented order (nlohmann::ordered_json), numbers as
 // nlohmann-json prints them (at most 17 significant digits, reading back to the same double), so
-// the same inputs give the same bytes. The writers refuse what the protocol forbids instead of writing it: a non-finite number,
-// a time stamp before the previous one of the same stream, a message before the header, a wheel or
-// sensor name the header does not list, a wheel listed twice, torques for only some wheels. Each refusal is a std::invalid_argument naming the message
+// the same inputs give the same bytes. The writers refuse what the protocol forbids instead of
+// writing it: a non-finite number, a time stamp before the previous one of the same stream, a
+// message before the header, a wheel or sensor name the header does not list, a wheel listed
+// twice, torques for only some wheels. Each refusal is a std::invalid_argument naming the message
 // type and the reason; nothing is written for a refused message.
+//
+// The header is formats::LogHeader (the reader's type); its `protocol` is not read: the sensor log
+// says "rowloc/1" and the truth stream "rowloc-truth/1". The messages below are the simulator's own
+// writer inputs (flat, per-wheel values by name), not the reader's formats:: messages.
 #pragma once
 
-#include "rowloc/geometry/row_map.hpp"
-#include "rowloc/sim/gnss_model.hpp"
-#include "rowloc/sim/wheel_calibration_record.hpp"
+#include "rowloc/formats/gnss_fix_quality.hpp"
+#include "rowloc/formats/sensor_messages.hpp"
 
 #include <Eigen/Core>
 
@@ -24,25 +29,13 @@
 
 namespace rowloc::sim {
 
-/// "none", "sbas", "rtk_float", "rtk_fixed" (docs/protocol.md, `gps`).
-std::string_view GnssFixQualityName(GnssFixQuality fix);
-
 /// Names attached to a value, in the order of the header's list (e.g. per-wheel speeds).
 using NamedValues = std::vector<std::pair<std::string, double>>;
-
-struct LogHeader {
-  std::string source = "rowloc simulate";
-  std::string scenario;
-  std::string vehicle;
-  geometry::GeoOrigin origin;
-  std::vector<std::string> wheels;      ///< wheel (or track) names
-  std::vector<std::string> ultrasonic;  ///< ultrasonic sensor names
-};
 
 struct GpsMessage {
   double time_s = 0.0;
   std::string sensor = "gnss";
-  GnssFixQuality fix = GnssFixQuality::kNone;  ///< kNone: no position keys are written
+  formats::GnssFixQuality fix = formats::GnssFixQuality::kNone;  ///< kNone: no position keys are written
   double latitude_deg = 0.0, longitude_deg = 0.0, altitude_m = 0.0;
   double sigma_horizontal_m = 0.0, sigma_vertical_m = 0.0;
 };
@@ -82,7 +75,7 @@ struct VioMessage {
 class SensorLogWriter {
  public:
   /// Writes the header line. Throws std::invalid_argument for an invalid origin or duplicate names.
-  SensorLogWriter(std::ostream& out, LogHeader header);
+  SensorLogWriter(std::ostream& out, formats::LogHeader header);
 
   void Write(const GpsMessage& message);
   void Write(const ImuMessage& message);
@@ -101,7 +94,7 @@ class SensorLogWriter {
   void EmitMessage(const std::string& line, double time_s);
 
   std::ostream& out_;
-  LogHeader header_;
+  formats::LogHeader header_;
   double last_time_s_ = -std::numeric_limits<double>::infinity();
   std::size_t messages_ = 0;
 };
@@ -129,7 +122,7 @@ struct TruthRecord {
 /// Writes the ground-truth stream: a truth_header (the log header's keys) then truth lines.
 class TruthLogWriter {
  public:
-  TruthLogWriter(std::ostream& out, const LogHeader& header);
+  TruthLogWriter(std::ostream& out, const formats::LogHeader& header);
   void Write(const TruthRecord& record);
   std::size_t records_written() const { return records_; }
 
@@ -138,45 +131,6 @@ class TruthLogWriter {
   std::vector<std::string> wheels_;
   double last_time_s_ = -std::numeric_limits<double>::infinity();
   std::size_t records_ = 0;
-};
-
-struct EstimateRecord {
-  double time_s = 0.0;
-  Eigen::Vector2d position_m = Eigen::Vector2d::Zero();
-  std::optional<double> heading_rad;
-  /// Covariance of (x, y, phi) when heading_rad is set, of (x, y) otherwise (top-left block used).
-  std::optional<Eigen::Matrix3d> covariance;
-  /// Estimated slip per wheel name (SAE slip, or track slip i), written as `slip` when not empty.
-  std::vector<std::pair<std::string, double>> slip;
-  /// Calibration states per wheel, written as `wheel_calibration` when not empty.
-  std::vector<WheelCalibrationRecord> wheel_calibration;
-};
-
-/// One measurement update (docs/protocol.md §3 `update` line).
-struct UpdateLogRecord {
-  double time_s = 0.0;
-  std::string sensor;
-  Eigen::VectorXd innovation;             ///< length m >= 1
-  Eigen::MatrixXd innovation_covariance;  ///< m x m, symmetric
-  double nis = 0.0;                       ///< y^T S^-1 y, finite
-  bool accepted = false;
-};
-
-/// Writes an estimate stream (docs/protocol.md §3): estimate and update lines.
-class EstimateLogWriter {
- public:
-  EstimateLogWriter(std::ostream& out, const std::string& source, const std::string& vehicle,
-                    const geometry::GeoOrigin& origin);
-  /// Throws std::invalid_argument for non-finite values, time going backwards, or a covariance
-  /// that is not symmetric and positive semi-definite (up to round-off).
-  void Write(const EstimateRecord& record);
-  /// An `update` line; same time order as the estimate lines. Throws std::invalid_argument for
-  /// an empty sensor name, sizes that do not match or non-finite innovation/covariance/NIS.
-  void WriteUpdate(const UpdateLogRecord& record);
-
- private:
-  std::ostream& out_;
-  double last_time_s_ = -std::numeric_limits<double>::infinity();
 };
 
 }  // namespace rowloc::sim

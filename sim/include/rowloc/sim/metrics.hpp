@@ -33,10 +33,10 @@
 //    (R_w - R_a)^2 / sigma_R^2 (1 dof) over the estimates whose sigma_R > 0.
 #pragma once
 
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/geometry/segment_index.hpp"
 #include "rowloc/sim/batch_means.hpp"
 #include "rowloc/sim/chi_square_bands.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 
 #include <Eigen/Core>
 
@@ -78,7 +78,7 @@ struct TruthState {
 };
 
 /// Truth interpolated at t_s. Throws EvaluationError if the truth is empty or t_s is outside its span.
-TruthState InterpolateTruth(const TruthStream& truth, double t_s);
+TruthState InterpolateTruth(const formats::TruthStream& truth, double t_s);
 
 enum class AlongAcrossReference { kTrueHeading, kRowDirection };
 
@@ -104,7 +104,7 @@ struct PoseError {
 
 /// Errors of every estimate, in stream order. Throws EvaluationError (naming the estimate's
 /// line) when an estimate lies outside the truth's time span.
-std::vector<PoseError> ComputePoseErrors(const TruthStream& truth, const EstimateStream& estimates,
+std::vector<PoseError> ComputePoseErrors(const formats::TruthStream& truth, const formats::EstimateStream& estimates,
                                          const std::optional<geometry::SegmentIndex>& rows);
 
 struct PositionSummary {
@@ -165,7 +165,7 @@ struct SensorInnovationResult {
   std::vector<int> dofs;                  ///< innovation length, every update
 };
 /// One result per sensor name, sorted by name.
-std::vector<SensorInnovationResult> AnalyzeInnovations(const std::vector<UpdateRecord>& updates,
+std::vector<SensorInnovationResult> AnalyzeInnovations(const std::vector<formats::UpdateRecord>& updates,
                                                        std::size_t max_lag, double probability = 0.95);
 
 struct DriftInterval {
@@ -178,7 +178,7 @@ struct DriftInterval {
   double growth_m = 0.0;           ///< error_end - error_start
   double max_error_m = 0.0;
 };
-std::vector<DriftInterval> DriftAfterFixLoss(const TruthStream& truth, const std::vector<PoseError>& errors,
+std::vector<DriftInterval> DriftAfterFixLoss(const formats::TruthStream& truth, const std::vector<PoseError>& errors,
                                              double min_duration_s = 5.0);
 
 struct WheelSlipError {
@@ -186,7 +186,8 @@ struct WheelSlipError {
   ErrorStatistics error;  ///< estimate - truth (mean signed, max |.|, RMS)
 };
 /// Per wheel named in both an estimate's slip and the interpolated truth, sorted by name.
-std::vector<WheelSlipError> CompareWheelSlip(const TruthStream& truth, const EstimateStream& estimates);
+std::vector<WheelSlipError> CompareWheelSlip(const formats::TruthStream& truth,
+                                             const formats::EstimateStream& estimates);
 
 struct RollingRadiusError {
   std::string wheel;
@@ -199,7 +200,8 @@ struct RollingRadiusError {
 };
 /// Per wheel named in both an estimate's `wheel_calibration` and the interpolated truth's
 /// rolling radius, sorted by name; empty when no estimate carries a calibration.
-std::vector<RollingRadiusError> CompareRollingRadius(const TruthStream& truth, const EstimateStream& estimates,
+std::vector<RollingRadiusError> CompareRollingRadius(const formats::TruthStream& truth,
+                                                     const formats::EstimateStream& estimates,
                                                      double probability = 0.95);
 
 struct EvaluationOptions {
@@ -227,7 +229,7 @@ struct EvaluationResult {
 };
 
 /// All metrics. Throws EvaluationError (no estimates, estimate outside the truth span).
-EvaluationResult Evaluate(const TruthStream& truth, const EstimateStream& estimates,
+EvaluationResult Evaluate(const formats::TruthStream& truth, const formats::EstimateStream& estimates,
                           const EvaluationOptions& options);
 
 }  // namespace rowloc::sim

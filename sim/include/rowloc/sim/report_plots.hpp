@@ -15,9 +15,9 @@
 //     interval and the band of the time average (only when there is a NEES or an update).
 #pragma once
 
+#include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/sim/metrics.hpp"
-#include "rowloc/sim/trajectory_streams.hpp"
 
 #include <filesystem>
 #include <optional>
@@ -44,8 +44,9 @@ struct PlotFiles {
 
 /// Writes the data files and the script; creates the directory. Throws std::runtime_error
 /// naming a file that cannot be written.
-PlotFiles WritePlotFiles(const EvaluationResult& result, const TruthStream& truth, const EstimateStream& estimates,
-                         const std::optional<geometry::RowMap>& map, const std::filesystem::path& directory,
+PlotFiles WritePlotFiles(const EvaluationResult& result, const formats::TruthStream& truth,
+                         const formats::EstimateStream& estimates, const std::optional<geometry::RowMap>& map,
+                         const std::filesystem::path& directory,
                          const PlotOptions& options = {});
 
 /// First executable `name` on $PATH, if any.

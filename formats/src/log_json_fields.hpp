@@ -1,10 +1,10 @@
-// Checked access to the keys of one JSON object of a sensor log line (private to localization/src;
+// Checked access to the keys of one JSON object of a sensor log line (private to formats/src;
 // used by sensor_log_reader.cpp). Every failure throws SensorLogError located at the line, with the
 // key path ("origin.latitude_deg") as subject: docs/protocol.md requires that missing keys, wrong
 // types and non-finite numbers "name the line and the key". Unknown keys are never looked at.
 #pragma once
 
-#include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -14,7 +14,7 @@
 #include <string>
 #include <utility>
 
-namespace rowloc::localization::detail {
+namespace rowloc::formats::detail {
 
 /// Where a line came from: the input's name and the 1-based line number.
 struct LineLocation {
@@ -104,4 +104,4 @@ class JsonFields {
   std::string prefix_;
 };
 
-}  // namespace rowloc::localization::detail
+}  // namespace rowloc::formats::detail

@@ -1,5 +1,6 @@
 // Value types of the sensor log and the sensor messages of docs/protocol.md §1, as read by
-// SensorLogReader (sensor_log_reader.hpp) and, one line at a time, by the service.
+// SensorLogReader (sensor_log_reader.hpp) and, one line at a time, by the service. LogHeader is
+// also the header the simulator's writers take (sim/log_writers.hpp).
 //
 // SI units are named in every field (docs/protocol.md, conventions); times are seconds (double)
 // since the log's epoch. Per-wheel values are stored by position in the header's wheel list, not by
@@ -9,6 +10,7 @@
 // steerable has no steering angle.
 #pragma once
 
+#include "rowloc/formats/gnss_fix_quality.hpp"
 #include "rowloc/geometry/row_map.hpp"
 
 #include <cstddef>
@@ -18,24 +20,23 @@
 #include <variant>
 #include <vector>
 
-namespace rowloc::localization {
+namespace rowloc::formats {
 
 /// The `log_header` line (docs/protocol.md §1).
 struct LogHeader {
-  std::string protocol;                 ///< as written: "rowloc/1" (or a minor revision "rowloc/1.N")
+  /// As read: "rowloc/1" (or a minor revision "rowloc/1.N"). The simulator's writers do not read it:
+  /// they write the version they implement.
+  std::string protocol;
   std::string source;                   ///< who wrote the log, e.g. "rowloc simulate"
   std::string scenario;                 ///< informative
   std::string vehicle;                  ///< informative (replay takes the vehicle config from its options)
   geometry::GeoOrigin origin;           ///< WGS84 origin of the local ENU frame
   std::vector<std::string> wheels;      ///< wheel (or track) names, unique; defines the wheel order
   std::vector<std::string> ultrasonic;  ///< ultrasonic sensor names, unique
+  /// Optional `reorder_window_s` (a service journal, docs/service.md §8): the messages are in
+  /// arrival order and are ordered within this window (s, >= 0); 0: the log is in time order.
+  double reorder_window_s = 0.0;
 };
-
-/// GNSS fix quality (`fix` of a `gps` message); kNone: the receiver has no position.
-enum class GnssFixQuality { kNone, kSbas, kRtkFloat, kRtkFixed };
-
-/// "none", "sbas", "rtk_float" or "rtk_fixed".
-std::string_view GnssFixQualityName(GnssFixQuality fix);
 
 /// Antenna position of a GNSS fix and the receiver's own 1-sigma claims.
 struct GpsPosition {
@@ -105,4 +106,4 @@ double TimeOf(const SensorMessage& message);
 /// The protocol's `type` of a message: "gps", "imu", "wheels", "steering", "ultrasonic" or "vio".
 std::string_view TypeOf(const SensorMessage& message);
 
-}  // namespace rowloc::localization
+}  // namespace rowloc::formats

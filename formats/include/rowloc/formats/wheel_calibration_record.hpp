@@ -1,14 +1,14 @@
 // The slip-aware odometry's calibration states of one wheel, as the estimate stream carries them
 // (docs/protocol.md §3 `wheel_calibration`; the model is docs/localization-filter.md §4):
 // rolling radius R_w and slip compliance kappa (slip per unit traction coefficient) with their
-// standard deviations. Written by log_writers.hpp, read by trajectory_streams.hpp, both with the
-// keys and domains of kWheelCalibrationFields.
+// standard deviations. Written by estimate_stream_writer.hpp, read by trajectory_streams.hpp, both
+// with the keys and domains of kWheelCalibrationFields.
 #pragma once
 
 #include <array>
 #include <string>
 
-namespace rowloc::sim {
+namespace rowloc::formats {
 
 struct WheelCalibrationRecord {
   std::string wheel;
@@ -37,4 +37,4 @@ inline constexpr std::array<WheelCalibrationField, 4> kWheelCalibrationFields{{
     {"slip_compliance_sigma", &WheelCalibrationRecord::slip_compliance_sigma, false},
 }};
 
-}  // namespace rowloc::sim
+}  // namespace rowloc::formats

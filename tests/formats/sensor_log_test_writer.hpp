@@ -6,7 +6,7 @@
 // shortest text of the same double. Names are written without escaping (the fixtures need none).
 #pragma once
 
-#include "rowloc/localization/sensor_messages.hpp"
+#include "rowloc/formats/sensor_messages.hpp"
 
 #include <charconv>
 #include <cstdlib>
@@ -15,7 +15,7 @@
 #include <variant>
 #include <vector>
 
-namespace rowloc::localization::log_text {
+namespace rowloc::formats::log_text {
 
 /// Shortest text that reads back as the same double.
 inline std::string JsonNumber(double value) {
@@ -131,4 +131,4 @@ inline std::string WriteLine(const LogHeader& header, const SensorMessage& messa
   return std::visit([&header](const auto& m) { return Write(header, m); }, message);
 }
 
-}  // namespace rowloc::localization::log_text
+}  // namespace rowloc::formats::log_text

@@ -1,5 +1,5 @@
 // Readers of the truth and estimate NDJSON streams (see trajectory_streams.hpp).
-#include "rowloc/sim/trajectory_streams.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <fstream>
 
-namespace rowloc::sim {
+namespace rowloc::formats {
 namespace {
 
 using nlohmann::json;
@@ -317,4 +317,4 @@ EstimateStream ReadEstimateStream(const std::filesystem::path& path, const LineP
   return ParseEstimateStream(in, path.string(), progress);
 }
 
-}  // namespace rowloc::sim
+}  // namespace rowloc::formats

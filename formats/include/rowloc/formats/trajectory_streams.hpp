@@ -19,7 +19,7 @@
 // eigenvalue (>= -1e-12 of the largest entry), definiteness by a successful Eigen LLT. Angles are taken as written (a reader does not re-wrap them).
 #pragma once
 
-#include "rowloc/sim/wheel_calibration_record.hpp"
+#include "rowloc/formats/wheel_calibration_record.hpp"
 
 #include <Eigen/Core>
 
@@ -33,7 +33,7 @@
 #include <string>
 #include <vector>
 
-namespace rowloc::sim {
+namespace rowloc::formats {
 
 /// A defect in a truth or estimate stream; the message names file, line and key.
 class StreamFormatError : public std::runtime_error {
@@ -108,4 +108,4 @@ TruthStream ReadTruthStream(const std::filesystem::path& path, const LineProgres
 EstimateStream ReadEstimateStream(const std::filesystem::path& path,
                                   const LineProgress& progress = {});
 
-}  // namespace rowloc::sim
+}  // namespace rowloc::formats

@@ -14,7 +14,8 @@
 //   header (an unknown name is an error); `speed_radps` (and `torque_nm` when present) carries every
 //   wheel of the header;
 // - inside one log `t` never decreases (checked by SensorLogReader, not by ParseSensorMessage,
-//   which sees one line);
+//   which sees one line), except in a log whose header has a `reorder_window_s` > 0 (a service
+//   journal, in arrival order: its reader orders it with localization/reorder_buffer.hpp);
 // - unknown keys are ignored (forward compatibility); an unknown message `type` is an error in this
 //   version (a later protocol version may relax that, e.g. to skip types it declares optional), and
 //   so is a second `log_header`.
@@ -28,7 +29,9 @@
 // in speed_radps)". Nested keys are joined with '.'; whole-line problems use the subject "line".
 #pragma once
 
-#include "rowloc/localization/sensor_messages.hpp"
+#include "rowloc/formats/sensor_messages.hpp"
+
+#include <nlohmann/json_fwd.hpp>
 
 #include <cstddef>
 #include <istream>
@@ -38,7 +41,7 @@
 #include <string>
 #include <string_view>
 
-namespace rowloc::localization {
+namespace rowloc::formats {
 
 /// Longest accepted line, terminator excluded (docs/protocol.md: "at most 1 MiB per line").
 inline constexpr std::size_t kMaxLogLineBytes = std::size_t{1} << 20;
@@ -69,6 +72,9 @@ LogHeader ParseLogHeader(std::string_view line, const std::string& source, std::
 /// time order, which needs the previous message. Throws SensorLogError.
 SensorMessage ParseSensorMessage(std::string_view line, const LogHeader& header, const std::string& source,
                                  std::size_t line_number);
+/// The same for a line already parsed into JSON (the service parses each request line once).
+SensorMessage ParseSensorMessageObject(const nlohmann::json& object, const LogHeader& header,
+                                       const std::string& source, std::size_t line_number);
 
 /// Reads a whole log from a stream: the header on construction, then one message per Next().
 /// After a SensorLogError from Next() the bad line is consumed: calling Next() again goes on with
@@ -102,4 +108,4 @@ class SensorLogReader {
   std::size_t messages_read_ = 0;
 };
 
-}  // namespace rowloc::localization
+}  // namespace rowloc::formats

@@ -1,6 +1,6 @@
 // Readers of the truth and estimate streams (docs/protocol.md §2-3): what they accept, and a
 // clear error naming file, line and key for everything they reject.
-#include "rowloc/sim/trajectory_streams.hpp"
+#include "rowloc/formats/trajectory_streams.hpp"
 
 #include "test_support.hpp"
 
@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-namespace rowloc::sim {
+namespace rowloc::formats {
 namespace {
 
 using ::testing::HasSubstr;
@@ -254,4 +254,4 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<BadInput>& param_info) { return std::string(param_info.param.name); });
 
 }  // namespace
-}  // namespace rowloc::sim
+}  // namespace rowloc::formats

@@ -1,5 +1,5 @@
 // Sensor log reader (see sensor_log_reader.hpp for the rules, docs/protocol.md §1 for the format).
-#include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
 
 #include "log_json_fields.hpp"
 
@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace rowloc::localization {
+namespace rowloc::formats {
 namespace {
 
 using detail::FormatNumber;
@@ -140,6 +140,9 @@ LogHeader HeaderFromFields(const JsonFields& fields) {
   header.origin.altitude_m = origin.Number("altitude_m");
   header.wheels = ReadNames(fields, "wheels");
   header.ultrasonic = ReadNames(fields, "ultrasonic");
+  if (fields.object().contains("reorder_window_s")) {
+    header.reorder_window_s = fields.NumberIn("reorder_window_s", 0.0, 3600.0);
+  }
   return header;
 }
 
@@ -259,7 +262,13 @@ LogHeader ParseLogHeader(std::string_view line, const std::string& source, std::
 SensorMessage ParseSensorMessage(std::string_view line, const LogHeader& header, const std::string& source,
                                  std::size_t line_number) {
   const LineLocation where{source, line_number};
-  const json object = ParseObject(line, where);
+  return ParseSensorMessageObject(ParseObject(line, where), header, source, line_number);
+}
+
+SensorMessage ParseSensorMessageObject(const nlohmann::json& object, const LogHeader& header,
+                                       const std::string& source, std::size_t line_number) {
+  const LineLocation where{source, line_number};
+  if (!object.is_object()) where.Fail("line", std::string("must be a JSON object, got ") + object.type_name());
   const std::string type = MessageType(object, where);
   const auto parser = std::find_if(kMessageParsers.begin(), kMessageParsers.end(),
                                    [&type](const auto& entry) { return entry.first == type; });
@@ -287,7 +296,8 @@ std::optional<SensorMessage> SensorLogReader::Next() {
   if (!ReadLine(line)) return std::nullopt;
   SensorMessage message = ParseSensorMessage(line, header_, source_, line_number_);
   const double time_s = TimeOf(message);
-  if (time_s < last_time_s_) {
+  // A journal with a reorder window holds messages in arrival order; its reader orders them.
+  if (time_s < last_time_s_ && header_.reorder_window_s == 0.0) {
     throw SensorLogError(source_, line_number_, "t",
                          FormatNumber(time_s) + " s is before the previous message's " + FormatNumber(last_time_s_) +
                              " s (time never decreases inside a log)");
@@ -315,4 +325,4 @@ bool SensorLogReader::ReadLine(std::string& line) {
   return false;
 }
 
-}  // namespace rowloc::localization
+}  // namespace rowloc::formats

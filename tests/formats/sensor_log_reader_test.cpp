@@ -1,7 +1,7 @@
 // Tests of the sensor log reader (docs/protocol.md §1): real simulator logs read back exactly
 // (tests/data/logs/README.md says how they were made), then one test per rule, each checking the
 // "<source>:<line>: <key>: <reason>" of the error.
-#include "rowloc/localization/sensor_log_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
 
 #include "sensor_log_test_writer.hpp"
 #include "test_support.hpp"
@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-namespace rowloc::localization {
+namespace rowloc::formats {
 namespace {
 
 using ::testing::HasSubstr;
@@ -357,4 +357,4 @@ TEST(SensorLogReaderErrors, UnterminatedOrOverlongLine) {
 }
 
 }  // namespace
-}  // namespace rowloc::localization
+}  // namespace rowloc::formats

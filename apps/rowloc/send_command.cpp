@@ -1,0 +1,134 @@
+// `rowloc send LOG --to HOST:PORT --vehicle NAME|FILE [--map NAME] [--filter NAME|FILE] [--rate R]
+//  -o ESTIMATES`: streams a sensor log through a running service (`rowloc serve`) as a robot
+// would, in a new session, and writes the estimate stream the service sends back. For the same log,
+// vehicle, filter and map this file equals `rowloc replay`'s output byte for byte (the service runs
+// the same session type). --rate: `max` (as fast as the service takes them), `realtime`, or a
+// multiple of real time such as `x10`. Exit 2 for bad input or a refused session, 1 when the
+// service went away.
+#include "commands.hpp"
+
+#include "rowloc/service/client.hpp"
+
+#include <nlohmann/json.hpp>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+namespace rowloc::apps {
+namespace {
+
+struct SendOptions {
+  std::string log_path, to = "127.0.0.1:7878", vehicle, map, filter, output_path, rate = "max", session;
+  double period_s = 0.1;
+};
+
+/// Time scale of --rate: 0 for max, else seconds of wall time per second of log time.
+double WallPerLogSecond(const std::string& rate) {
+  if (rate == "max") return 0.0;
+  if (rate == "realtime") return 1.0;
+  if (rate.size() > 1 && rate.front() == 'x') {
+    std::size_t used = 0;
+    double factor = 0.0;
+    try {
+      factor = std::stod(rate.substr(1), &used);
+    } catch (const std::exception&) {
+    }
+    if (used == rate.size() - 1 && factor > 0 && std::isfinite(factor)) return 1.0 / factor;
+  }
+  throw std::invalid_argument("--rate: expected max, realtime or xN (N > 0), got '" + rate + "'");
+}
+
+/// A vehicle or filter: a file (sent inline) when the path exists, else a name on the server.
+void AddConfig(nlohmann::json& request, const std::string& value, const char* name_key, const char* inline_key) {
+  if (value.empty()) return;
+  if (std::filesystem::is_regular_file(value)) {
+    std::ifstream in(value, std::ios::binary);
+    const nlohmann::json config = nlohmann::json::parse(in, nullptr, false);
+    if (!config.is_object()) throw std::invalid_argument(value + ": not a JSON object");
+    request[inline_key] = config;
+  } else {
+    request[name_key] = value;
+  }
+}
+
+void DrainPushed(service::Client& client, const std::string& session, std::ofstream& out, std::size_t& lines) {
+  while (const std::optional<std::string> line = client.ReadPushed(std::chrono::milliseconds(0))) {
+    out << service::WithoutSessionKey(*line, session) << '\n';
+    ++lines;
+  }
+  while (const std::optional<nlohmann::json> error = client.TakeError()) {
+    spdlog::warn("service: line {}: {}: {}", error->value("line", 0), error->value("code", ""),
+                 error->value("message", ""));
+  }
+}
+
+void RunSend(const SendOptions& o) {
+  const double wall_per_log_s = WallPerLogSecond(o.rate);
+  std::ifstream log(o.log_path, std::ios::binary);
+  if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log");
+  std::string header_line;
+  if (!std::getline(log, header_line)) throw std::runtime_error(o.log_path + ": empty sensor log");
+  const nlohmann::json header = nlohmann::json::parse(header_line, nullptr, false);
+  if (!header.is_object() || header.value("type", "") != "log_header") {
+    throw std::runtime_error(o.log_path + ":1: the first line must be a log_header");
+  }
+  service::Client client = service::Client::Connect(o.to);
+  client.Hello();
+  nlohmann::json open{{"header", header}, {"period_s", o.period_s}};
+  AddConfig(open, o.vehicle, "vehicle", "vehicle_config");
+  AddConfig(open, o.filter, "filter", "filter_config");
+  if (!o.map.empty()) open["map"] = o.map;
+  if (!o.session.empty()) open["session"] = o.session;
+  const std::string session = client.OpenSession(open);
+  client.Subscribe(session, "estimates");
+  std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error(o.output_path + ": cannot open for writing");
+  spdlog::info("send {} to {} (session {}, rate {})", o.log_path, o.to, session, o.rate);
+
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<double> first_t;
+  std::size_t sent = 0, written = 0;
+  std::string line;
+  while (std::getline(log, line)) {
+    if (line.empty() || line == "\r") continue;
+    if (wall_per_log_s > 0) {
+      const nlohmann::json message = nlohmann::json::parse(line, nullptr, false);
+      if (message.is_object() && message.contains("t") && message["t"].is_number()) {
+        const double t = message["t"].get<double>();
+        if (!first_t) first_t = t;
+        std::this_thread::sleep_until(start + std::chrono::duration<double>((t - *first_t) * wall_per_log_s));
+      }
+    }
+    client.SendMessage(session, line);
+    if (++sent % 256 == 0) DrainPushed(client, session, out, written);
+  }
+  const nlohmann::json closed = client.CloseSession(session);  // applies what the reorder window holds
+  DrainPushed(client, session, out, written);
+  out.flush();
+  if (!out) throw std::runtime_error(o.output_path + ": write failed");
+  spdlog::info("sent {} messages ({} accepted) in {:.2f} s; wrote {} lines to {}", sent,
+               closed.value("messages", 0), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+               written, o.output_path);
+}
+
+}  // namespace
+
+void RegisterSendCommand(CLI::App& app) {
+  auto o = std::make_shared<SendOptions>();
+  CLI::App* cmd = app.add_subcommand("send", "Stream a sensor log through a running service: estimate stream");
+  cmd->add_option("log", o->log_path, "Sensor log (docs/protocol.md §1)")->required();
+  cmd->add_option("--to", o->to, "The service: HOST:PORT or unix:PATH (default 127.0.0.1:7878)");
+  cmd->add_option("--vehicle", o->vehicle, "Vehicle name on the server, or a vehicle file (sent inline)")->required();
+  cmd->add_option("--map", o->map, "Row map name on the server");
+  cmd->add_option("--filter", o->filter, "Filter name on the server, or a filter file (sent inline)");
+  cmd->add_option("--session", o->session, "Session name (default: the server's)");
+  cmd->add_option("--rate", o->rate, "max (default), realtime, or xN: N times real time");
+  cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
+  cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
+  cmd->callback([o] { RunReportingInputErrors("send", [&o] { RunSend(*o); }); });
+}
+
+}  // namespace rowloc::apps

@@ -1,0 +1,91 @@
+// Settings of the service: the file's keys, their domains, and the loopback rule (docs/service.md §9-10).
+#include "rowloc/service/service_settings.hpp"
+
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+namespace rowloc::service {
+namespace {
+
+std::filesystem::path Write(const rowloc::test::ScratchDir& dir, const std::string& text) {
+  const auto path = dir / "settings.json";
+  std::ofstream(path) << text;
+  return path;
+}
+
+TEST(ServiceSettings, DefaultsAreValidAndLoopback) {
+  const ServiceSettings s;
+  EXPECT_NO_THROW(ValidateServiceSettings(s));
+  EXPECT_EQ(s.listen, "127.0.0.1");
+  EXPECT_EQ(s.port, 7878);
+  EXPECT_EQ(s.fsync, FsyncPolicy::kInterval);
+}
+
+TEST(ServiceSettings, FileOverridesEveryKeyItNames) {
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings s = LoadServiceSettings(Write(dir, R"({"port":0,"threads":4,"fsync":"always",
+      "max_queue_lines":64,"slow_client":"disconnect","reorder_window_s":0.5,"journal_dir":"/var/lib/rowloc"})"));
+  EXPECT_EQ(s.port, 0);
+  EXPECT_EQ(s.threads, 4);
+  EXPECT_EQ(s.fsync, FsyncPolicy::kAlways);
+  EXPECT_EQ(s.max_queue_lines, 64u);
+  EXPECT_EQ(s.slow_client, SlowClientPolicy::kDisconnect);
+  EXPECT_EQ(s.reorder_window_s, 0.5);
+  EXPECT_EQ(s.journal_dir, "/var/lib/rowloc");
+  EXPECT_EQ(s.max_sessions, 1024u);  // untouched
+  EXPECT_NO_THROW(ValidateServiceSettings(s));
+}
+
+TEST(ServiceSettings, BadFilesNameTheirKey) {
+  rowloc::test::ScratchDir dir;
+  const auto refused = [&](const std::string& text, const std::string& fragment) {
+    try {
+      ValidateServiceSettings(LoadServiceSettings(Write(dir, text)));
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const ServiceSettingsError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  refused(R"({"prot":1})", "unknown key \"prot\"");
+  refused(R"({"port":"80"})", "port");
+  refused(R"({"port":70000})", "port");
+  refused(R"({"threads":0})", "threads");
+  refused(R"({"fsync":"sometimes"})", "fsync");
+  refused(R"({"max_line_bytes":10})", "max_line_bytes");
+  refused(R"({"max_queue_lines":-1})", "max_queue_lines");
+  refused(R"({"reorder_window_s":10})", "reorder_window_s");
+  refused(R"({"listen":"0.0.0.0"})", "token file");
+  refused(R"([1])", "JSON object");
+  refused(R"({"port":)", "not valid JSON");
+  EXPECT_THROW(LoadServiceSettings(dir.path()), ServiceSettingsError);  // a directory
+  EXPECT_THROW(LoadServiceSettings(dir / "missing.json"), ServiceSettingsError);
+}
+
+TEST(ServiceSettings, OtherAddressesNeedAToken) {
+  ServiceSettings s;
+  s.listen = "0.0.0.0";
+  EXPECT_THROW(ValidateServiceSettings(s), ServiceSettingsError);
+  s.token_file = "/etc/rowloc/token";
+  EXPECT_NO_THROW(ValidateServiceSettings(s));
+  EXPECT_TRUE(IsLoopbackAddress("127.0.0.1"));
+  EXPECT_TRUE(IsLoopbackAddress("127.1.2.3"));
+  EXPECT_TRUE(IsLoopbackAddress("::1"));
+  EXPECT_FALSE(IsLoopbackAddress("10.0.0.1"));
+  EXPECT_FALSE(IsLoopbackAddress("::"));
+}
+
+TEST(ServiceSettings, TokenIsTheFirstLineAndMustNotBeEmpty) {
+  rowloc::test::ScratchDir dir;
+  std::ofstream(dir / "token") << "abc123  \nsecond line\n";
+  EXPECT_EQ(ReadToken(dir / "token"), "abc123");
+  std::ofstream(dir / "empty") << "\n";
+  EXPECT_THROW(ReadToken(dir / "empty"), ServiceSettingsError);
+  std::ofstream(dir / "big") << std::string(5000, 'x');
+  EXPECT_THROW(ReadToken(dir / "big"), ServiceSettingsError);
+}
+
+}  // namespace
+}  // namespace rowloc::service
