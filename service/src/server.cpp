@@ -330,6 +330,9 @@ class Server::Impl {
         continue;
       }
       using Socket = decltype(socket);
+      if constexpr (std::is_same_v<Acceptor, tcp::acceptor>) {
+        socket.set_option(tcp::no_delay(true), ec);  // replies are small: no Nagle delay
+      }
       auto connection = std::make_shared<Connection<Socket>>(std::move(socket), dispatcher_, ++next_id_);
       {
         std::lock_guard lock(connections_mutex_);
