@@ -15,10 +15,19 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <optional>
+#include <stdexcept>
 #include <thread>
 
 namespace rowloc::apps {
 namespace {
+
+/// The service closed the connection or stopped after the session was opened (exit 1).
+class ServiceGone : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+inline constexpr int kServiceGoneExitCode = 1;
 
 struct SendOptions {
   std::string log_path, to = "127.0.0.1:7878", vehicle, map, filter, output_path, rate = "max", session;
@@ -56,6 +65,11 @@ void AddConfig(nlohmann::json& request, const std::string& value, const char* na
 
 void DrainPushed(service::Client& client, const std::string& session, std::ofstream& out, std::size_t& lines) {
   while (const std::optional<std::string> line = client.ReadPushed(std::chrono::milliseconds(0))) {
+    if (line->starts_with(R"({"type":"shutdown")")) {  // not an estimate line: the server is stopping
+      const nlohmann::json notice = nlohmann::json::parse(*line, nullptr, false);
+      throw ServiceGone("the service is stopping: " +
+                        (notice.is_object() ? notice.value("message", std::string()) : std::string()));
+    }
     out << service::WithoutSessionKey(*line, session) << '\n';
     ++lines;
   }
@@ -75,38 +89,56 @@ void RunSend(const SendOptions& o) {
   if (!header.is_object() || header.value("type", "") != "log_header") {
     throw std::runtime_error(o.log_path + ":1: the first line must be a log_header");
   }
-  service::Client client = service::Client::Connect(o.to);
-  client.Hello();
   nlohmann::json open{{"header", header}, {"period_s", o.period_s}};
   AddConfig(open, o.vehicle, "vehicle", "vehicle_config");
   AddConfig(open, o.filter, "filter", "filter_config");
   if (!o.map.empty()) open["map"] = o.map;
   if (!o.session.empty()) open["session"] = o.session;
-  const std::string session = client.OpenSession(open);
-  client.Subscribe(session, "estimates");
+  // Before the session is opened: a bad output path must not leave a session open on the server.
   std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
   if (!out) throw std::runtime_error(o.output_path + ": cannot open for writing");
+  service::Client client = service::Client::Connect(o.to);
+  client.Hello();
+  const std::string session = client.OpenSession(open);
+  client.Subscribe(session, "estimates");
   spdlog::info("send {} to {} (session {}, rate {})", o.log_path, o.to, session, o.rate);
 
   const auto start = std::chrono::steady_clock::now();
   std::optional<double> first_t;
-  std::size_t sent = 0, written = 0;
+  std::size_t sent = 0, written = 0, line_number = 1;
   std::string line;
-  while (std::getline(log, line)) {
-    if (line.empty() || line == "\r") continue;
-    if (wall_per_log_s > 0) {
-      const nlohmann::json message = nlohmann::json::parse(line, nullptr, false);
-      if (message.is_object() && message.contains("t") && message["t"].is_number()) {
-        const double t = message["t"].get<double>();
-        if (!first_t) first_t = t;
-        std::this_thread::sleep_until(start + std::chrono::duration<double>((t - *first_t) * wall_per_log_s));
+  nlohmann::json closed;
+  try {
+    while (std::getline(log, line)) {
+      ++line_number;
+      if (line.empty() || line == "\r") continue;
+      if (wall_per_log_s > 0) {
+        const nlohmann::json message = nlohmann::json::parse(line, nullptr, false);
+        if (message.is_object() && message.contains("t") && message["t"].is_number()) {
+          const double t = message["t"].get<double>();
+          if (!first_t) first_t = t;
+          std::this_thread::sleep_until(start + std::chrono::duration<double>((t - *first_t) * wall_per_log_s));
+        }
       }
+      std::string message;
+      try {
+        message = service::WithSessionKey(line, session);
+      } catch (const std::invalid_argument& e) {  // the log's fault (exit 2); the session is closed first
+        client.CloseSession(session);
+        throw std::invalid_argument(o.log_path + ":" + std::to_string(line_number) + ": " + e.what());
+      }
+      client.SendLine(message);
+      if (++sent % 256 == 0) DrainPushed(client, session, out, written);
     }
-    client.SendMessage(session, line);
-    if (++sent % 256 == 0) DrainPushed(client, session, out, written);
+    closed = client.CloseSession(session);  // applies what the reorder window holds
+    DrainPushed(client, session, out, written);
+  } catch (const service::ClientError&) {
+    throw;  // a refusal (exit 2)
+  } catch (const ServiceGone&) {
+    throw;
+  } catch (const std::runtime_error& e) {  // the connection: a failed write, a closed connection, no reply
+    throw ServiceGone("the service went away after " + std::to_string(sent) + " messages: " + e.what());
   }
-  const nlohmann::json closed = client.CloseSession(session);  // applies what the reorder window holds
-  DrainPushed(client, session, out, written);
   out.flush();
   if (!out) throw std::runtime_error(o.output_path + ": write failed");
   spdlog::info("sent {} messages ({} accepted) in {:.2f} s; wrote {} lines to {}", sent,
@@ -128,7 +160,20 @@ void RegisterSendCommand(CLI::App& app) {
   cmd->add_option("--rate", o->rate, "max (default), realtime, or xN: N times real time");
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
-  cmd->callback([o] { RunReportingInputErrors("send", [&o] { RunSend(*o); }); });
+  cmd->callback([o] {
+    std::optional<std::string> gone;
+    RunReportingInputErrors("send", [&] {
+      try {
+        RunSend(*o);
+      } catch (const ServiceGone& e) {
+        gone = e.what();
+      }
+    });
+    if (gone) {
+      spdlog::error("send: {}", *gone);
+      throw CLI::RuntimeError(kServiceGoneExitCode);
+    }
+  });
 }
 
 }  // namespace rowloc::apps

@@ -8,11 +8,15 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 
+#include <algorithm>
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
+#include <vector>
 
 namespace rowloc::service {
 namespace asio = boost::asio;
@@ -67,18 +71,34 @@ class Client::Impl {
   }
 
   void SendLine(std::string_view line) {
-    std::string text(line);
-    text.push_back('\n');
     std::lock_guard lock(write_mutex_);
-    asio::write(stream_, asio::buffer(text));
+    WriteLineLocked(line);
   }
 
   nlohmann::json Request(nlohmann::json request, std::chrono::milliseconds timeout) {
     const std::int64_t id = next_id_++;
     request["id"] = id;
-    SendLine(request.dump());
+    const std::string text = request.dump();
+    {
+      // The request is awaited by its id and by its line number on this connection: an error the
+      // server gives before it could read the id (line_too_long) names only the line.
+      std::lock_guard write_lock(write_mutex_);
+      {
+        std::lock_guard lock(mutex_);
+        awaited_[id] = lines_sent_ + 1;  // dump() escapes newlines: one line
+      }
+      try {
+        WriteLineLocked(text);
+      } catch (...) {
+        std::lock_guard lock(mutex_);
+        awaited_.erase(id);
+        throw;
+      }
+    }
     std::unique_lock lock(mutex_);
-    if (!ready_.wait_for(lock, timeout, [&] { return replies_.contains(id) || eof_; })) {
+    const bool answered = ready_.wait_for(lock, timeout, [&] { return replies_.contains(id) || eof_; });
+    awaited_.erase(id);  // a reply after a timeout is not kept (it goes to ReadPushed or TakeError)
+    if (!answered) {
       throw std::runtime_error("no reply to " + request.value("type", std::string("request")) + " within " +
                                std::to_string(timeout.count()) + " ms");
     }
@@ -110,6 +130,14 @@ class Client::Impl {
   }
 
  private:
+  /// Writes one line and counts the lines sent (the server numbers every newline-terminated line).
+  void WriteLineLocked(std::string_view line) {
+    std::string text(line);
+    text.push_back('\n');
+    asio::write(stream_, asio::buffer(text));
+    lines_sent_ += static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+  }
+
   void ReadLoop() {
     std::vector<char> buffer(64 * 1024);
     boost::system::error_code ec;
@@ -123,19 +151,39 @@ class Client::Impl {
     ready_.notify_all();
   }
 
-  /// A reply (an object whose "id" is an integer of ours) or a pushed line.
+  /// The reply to a waiting Request (its id, or for an error without an id its line number), an
+  /// error to another line, or a pushed line.
   void Deliver(std::string line) {
     const nlohmann::json j = nlohmann::json::parse(line, nullptr, false);
     std::lock_guard lock(mutex_);
-    const auto id = j.is_object() ? j.find("id") : j.end();
-    if (j.is_object() && id != j.end() && id->is_number_integer()) {
-      replies_[id->get<std::int64_t>()] = j;
-    } else if (j.is_object() && j.value("type", "") == "error") {
+    const bool is_error = j.is_object() && j.value("type", "") == "error";
+    if (const std::optional<std::int64_t> request = AwaitedRequest(j, is_error)) {
+      replies_[*request] = j;
+    } else if (is_error) {
       errors_.push_back(j);
     } else {
       pushed_.push_back(std::move(line));
     }
     ready_.notify_all();
+  }
+
+  /// The id of the waiting Request this line answers, if any (mutex_ held).
+  std::optional<std::int64_t> AwaitedRequest(const nlohmann::json& j, bool is_error) const {
+    if (!j.is_object()) return std::nullopt;
+    const auto id = j.find("id");
+    if (id != j.end() && id->is_number_integer()) {
+      const std::int64_t value = id->get<std::int64_t>();
+      if (awaited_.contains(value)) return value;
+      return std::nullopt;
+    }
+    const auto line = j.find("line");
+    if (!is_error || (id != j.end() && !id->is_null()) || line == j.end() || !line->is_number_unsigned()) {
+      return std::nullopt;
+    }
+    for (const auto& [request, line_number] : awaited_) {
+      if (line_number == line->get<std::size_t>()) return request;
+    }
+    return std::nullopt;
   }
 
   asio::io_context io_;
@@ -145,6 +193,8 @@ class Client::Impl {
   std::mutex write_mutex_;
   std::mutex mutex_;
   std::condition_variable ready_;
+  std::size_t lines_sent_ = 0;                     ///< guarded by write_mutex_
+  std::map<std::int64_t, std::size_t> awaited_;    ///< waiting Request: id -> its line number
   std::map<std::int64_t, nlohmann::json> replies_;
   std::deque<std::string> pushed_;
   std::deque<nlohmann::json> errors_;

@@ -324,7 +324,7 @@ void Dispatcher::HandleSensorMessage(ClientContext& client, const Json& request,
   const std::shared_ptr<ServiceSession> session = Session(request);
   formats::SensorMessage message;
   try {
-    message = formats::ParseSensorMessage(line, session->header(), session->name(), 0);
+    message = formats::ParseSensorMessageObject(request, session->header(), session->name(), 0);
   } catch (const formats::SensorLogError& e) {
     const bool missing = e.reason().rfind("missing", 0) == 0;
     Fail(missing ? ErrorCode::kMissingField : ErrorCode::kInvalidField, e.subject() + ": " + e.reason());

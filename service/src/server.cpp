@@ -32,6 +32,9 @@ class ConnectionBase : public OutputSink {
  public:
   virtual void Close() = 0;
   virtual double idle_s() const = 0;
+  /// After the I/O threads ended: drops the connection's reference to itself (which its reader
+  /// drops when it ends normally), so that a connection cut off by the stop is freed.
+  virtual void Detach() = 0;
 };
 
 template <class Socket>
@@ -97,6 +100,8 @@ class Connection : public ConnectionBase, public std::enable_shared_from_this<Co
     std::lock_guard lock(mutex_);
     RequestCloseLocked();
   }
+
+  void Detach() override { client_.sink.reset(); }
 
   double idle_s() const override {
     const auto last = std::chrono::steady_clock::time_point(
@@ -263,11 +268,10 @@ class Server::Impl {
   std::string unix_socket() const { return settings_.unix_socket; }
 
   void Run(bool handle_signals) {
-    asio::signal_set signals(io_);
     if (handle_signals) {
-      signals.add(SIGINT);
-      signals.add(SIGTERM);
-      signals.async_wait([this](const boost::system::error_code& ec, int signal) {
+      signals_.add(SIGINT);
+      signals_.add(SIGTERM);
+      signals_.async_wait([this](const boost::system::error_code& ec, int signal) {
         if (ec) return;
         spdlog::info("signal {}: stopping", signal);
         Stop();
@@ -280,6 +284,7 @@ class Server::Impl {
     for (int i = 1; i < settings_.threads; ++i) threads.emplace_back([this] { io_.run(); });
     io_.run();
     for (std::thread& t : threads) t.join();
+    for (const auto& connection : Connections()) connection->Detach();
   }
 
   void Stop() {
@@ -298,7 +303,9 @@ class Server::Impl {
       auto timer = std::make_shared<asio::steady_timer>(io_, std::chrono::milliseconds(200));
       timer->async_wait([this, timer](const boost::system::error_code&) {
         for (const auto& connection : Connections()) connection->Close();
-        io_.stop();
+        boost::system::error_code cancel_error;
+        signals_.cancel(cancel_error);
+        StopWhenClosed(std::chrono::steady_clock::now() + std::chrono::seconds(1));
       });
     });
   }
@@ -344,6 +351,17 @@ class Server::Impl {
     }
   }
 
+  /// Stops the I/O when every connection's coroutines have ended (their sockets closed), or at the
+  /// deadline; checked every 10 ms.
+  void StopWhenClosed(std::chrono::steady_clock::time_point deadline) {
+    if (Connections().empty() || std::chrono::steady_clock::now() >= deadline) {
+      io_.stop();
+      return;
+    }
+    auto timer = std::make_shared<asio::steady_timer>(io_, std::chrono::milliseconds(10));
+    timer->async_wait([this, timer, deadline](const boost::system::error_code&) { StopWhenClosed(deadline); });
+  }
+
   std::vector<std::shared_ptr<ConnectionBase>> Connections() {
     std::lock_guard lock(connections_mutex_);
     std::vector<std::shared_ptr<ConnectionBase>> alive;
@@ -379,6 +397,7 @@ class Server::Impl {
   Dispatcher& dispatcher_;
   const ServiceSettings& settings_;
   asio::io_context io_;
+  asio::signal_set signals_{io_};
   asio::steady_timer tick_;
   std::optional<tcp::acceptor> tcp_;
   std::optional<unix_socket::acceptor> unix_;

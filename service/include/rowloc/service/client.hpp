@@ -47,15 +47,17 @@ class Client {
   ~Client();
 
   /// Sends a request with a fresh integer `id` and waits for its reply (timeout: std::runtime_error).
-  /// An `error` reply throws ClientError; a lost connection std::runtime_error.
+  /// An `error` reply throws ClientError (also one to the request's line that names no id, such as
+  /// line_too_long); a lost connection std::runtime_error.
   nlohmann::json Request(nlohmann::json request, std::chrono::milliseconds timeout = std::chrono::seconds(30));
   /// Sends one raw line (a newline is added), waiting for nothing.
   void SendLine(std::string_view line);
   /// Sends a sensor-log line to a session: the line with "session" added, waiting for nothing.
   void SendMessage(const std::string& session, std::string_view log_line);
-  /// The next pushed line (not a reply), waiting up to timeout; nullopt on timeout or a closed connection.
+  /// The next pushed line (not a reply to a Request), waiting up to timeout; nullopt on timeout or a
+  /// closed connection.
   std::optional<std::string> ReadPushed(std::chrono::milliseconds timeout);
-  /// Error replies to lines sent without an id (e.g. a refused sensor message), as they came.
+  /// Error replies to lines not sent by Request (e.g. a refused sensor message), as they came.
   std::optional<nlohmann::json> TakeError();
 
   nlohmann::json Hello(const std::string& token = "");
