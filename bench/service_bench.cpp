@@ -191,7 +191,7 @@ void BM_ServiceThroughput(benchmark::State& state) {
     std::vector<std::vector<std::string>> chunks(connections);
     for (int c = 0; c < connections; ++c) {
       const int first = c * sessions / connections, last = (c + 1) * sessions / connections;
-      names[c] = OpenSessions(clients[c], first, last - first, "r" + std::to_string(round) + "-");
+      names[c] = OpenSessions(clients[c], first, last - first, std::string("r").append(std::to_string(round)) + "-");
       for (std::size_t i = 0; i < d.lines.size(); i += 200) {
         chunks[c].push_back(Chunk(names[c], i, std::min(i + 200, d.lines.size())));
       }
