@@ -18,6 +18,7 @@ void RunReportingInputErrors(std::string_view command, const std::function<void(
 void RegisterCommands(CLI::App& app) {
   RegisterExampleCommand(app);
   RegisterMapCommands(app);
+  RegisterMapBuildCommands(app);
   RegisterMappingCommands(app);
   RegisterWorldCommand(app);
   RegisterSimulateCommand(app);

@@ -20,6 +20,7 @@ void RegisterCommands(CLI::App& app);
 
 void RegisterExampleCommand(CLI::App& app);    // example_command.cpp
 void RegisterMapCommands(CLI::App& app);       // map_commands.cpp
+void RegisterMapBuildCommands(CLI::App& app);  // map_build_command.cpp (after RegisterMapCommands)
 void RegisterMappingCommands(CLI::App& app);   // mapping_commands.cpp
 void RegisterWorldCommand(CLI::App& app);      // world_command.cpp
 void RegisterSimulateCommand(CLI::App& app);   // simulate_command.cpp

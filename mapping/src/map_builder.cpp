@@ -1,0 +1,436 @@
+// The map build pipeline and its outputs (see map_builder.hpp).
+#include "rowloc/mapping/map_builder.hpp"
+
+#include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/row_map_geojson.hpp"
+#include "rowloc/mapping/canopy_occupancy_map.hpp"
+#include "rowloc/mapping/cloud_cleaning.hpp"
+#include "rowloc/mapping/polyline_simplification.hpp"
+#include "rowloc/mapping/row_outline.hpp"
+#include "rowloc/mapping/row_segmentation.hpp"
+
+#include <GeographicLib/UTMUPS.hpp>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
+
+namespace rowloc::mapping {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+void WriteText(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::system_error(errno, std::generic_category(), "cannot write " + path.string());
+  out << text;
+  out.flush();
+  if (!out) throw std::system_error(errno, std::generic_category(), "cannot write " + path.string());
+}
+
+double Round(double value, double unit) { return std::round(value / unit) * unit; }
+
+/// Drops vertices closer than 1e-6 m to their predecessor (the GeoJSON writer refuses them).
+std::vector<Eigen::Vector2d> DropRepeated(const std::vector<Eigen::Vector2d>& polygon) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : polygon) {
+    if (out.empty() || (p - out.back()).norm() > 1e-6) out.push_back(p);
+  }
+  while (out.size() > 1 && (out.front() - out.back()).norm() <= 1e-6) out.pop_back();
+  return out;
+}
+
+}  // namespace
+
+Georeference Georeference::Local(const geometry::GeoOrigin& origin) {
+  const std::string problem =
+      mapio::GeodeticPositionProblem(origin.latitude_deg, origin.longitude_deg, origin.altitude_m);
+  if (!problem.empty()) throw std::invalid_argument("origin: " + problem);
+  Georeference g;
+  g.kind = Kind::kLocal;
+  g.origin = origin;
+  return g;
+}
+
+Georeference Georeference::FromCrs(std::string_view crs) {
+  const std::string text(crs);
+  const auto bad = [&text]() {
+    return std::invalid_argument("--crs '" + text +
+                                 "': expected EPSG:326zz (UTM zone zz north) or EPSG:327zz (south), zz in 01..60");
+  };
+  std::string upper = text;
+  std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char ch) { return std::toupper(ch); });
+  if (upper.rfind("EPSG:", 0) != 0 || upper.size() != 10) throw bad();
+  const std::string code = upper.substr(5);
+  if (!std::all_of(code.begin(), code.end(), [](unsigned char ch) { return std::isdigit(ch); })) throw bad();
+  const int number = std::stoi(code);
+  const int zone = number % 100;
+  if ((number / 100 != 326 && number / 100 != 327) || zone < 1 || zone > 60) throw bad();
+  Georeference g;
+  g.kind = Kind::kUtm;
+  g.utm_zone = zone;
+  g.utm_north = number / 100 == 326;
+  return g;
+}
+
+std::string Georeference::Describe() const {
+  if (kind == Kind::kUtm) {
+    return fmt::format("EPSG:{}{:02d} (UTM {}{})", utm_north ? 326 : 327, utm_zone, utm_zone, utm_north ? 'N' : 'S');
+  }
+  return fmt::format("local ENU at {:.8f} N, {:.8f} E, {:.3f} m", origin.latitude_deg, origin.longitude_deg,
+                     origin.altitude_m);
+}
+
+MapBuildResult BuildRowMap(const PointCloud& cloud, const MapBuildConfig& config,
+                           const Georeference& georeference, bool keep_canopy) {
+  if (cloud.points_m.empty()) throw std::invalid_argument("the cloud has no points");
+  if (const auto problem = ValidateMapBuildConfig(config)) throw std::invalid_argument("configuration: " + *problem);
+  MapBuildResult result;
+  result.points_in = cloud.points_m.size();
+
+  // Offset: keeps the working coordinates small (UTM northings are ~5e6 m).
+  Eigen::Vector2d lo = cloud.points_m.front().head<2>();
+  Eigen::Vector2d hi = lo;
+  for (const auto& p : cloud.points_m) {
+    lo = lo.cwiseMin(p.head<2>());
+    hi = hi.cwiseMax(p.head<2>());
+  }
+  result.offset_m = Eigen::Vector2d(std::floor(lo.x()), std::floor(lo.y()));
+  PointCloud local;
+  local.points_m.reserve(cloud.points_m.size());
+  for (const auto& p : cloud.points_m) {
+    local.points_m.emplace_back(p.x() - result.offset_m.x(), p.y() - result.offset_m.y(), p.z());
+  }
+
+  // 1. Clean.
+  CleanResult clean = CleanCloud(local, config.clean);
+  PointCloud().points_m.swap(local.points_m);
+  result.stages.push_back({"clean: voxel downsampling", clean.points_after_voxel, "points", clean.voxel_seconds});
+  result.stages.push_back({"clean: outlier removal", clean.cloud.points_m.size(), "points", clean.outlier_seconds});
+  if (clean.cloud.points_m.empty()) throw std::invalid_argument("no points left after cleaning");
+
+  // 2. Terrain.
+  auto start = Clock::now();
+  result.terrain = BuildTerrainGrid(clean.cloud, config.terrain);
+  result.stages.push_back({"terrain: ground cells", result.terrain->GroundCellCount(),
+                           fmt::format("of {} cells", result.terrain->heights_m().size()), SecondsSince(start)});
+
+  // 3. Normalize: heights above the terrain, the canopy band.
+  start = Clock::now();
+  const std::vector<double> heights = HeightsAboveTerrain(clean.cloud, *result.terrain);
+  const std::vector<Eigen::Vector2d> band = SelectCanopyBand(clean.cloud, heights, config.band);
+  result.band_points = band.size();
+  result.stages.push_back({"normalize: canopy band", band.size(), "points", SecondsSince(start)});
+
+  // 4. Rows.
+  start = Clock::now();
+  RowDetection detection = DetectRows(band, config.rows);
+  result.parts_dropped = detection.parts_dropped;
+  result.links = detection.links;
+  std::size_t part_count = 0;
+  for (const auto& row : detection.rows) part_count += row.parts.size();
+  result.stages.push_back({"rows: parts", part_count,
+                           fmt::format("parts, {} rows, {} clutter, {} links", detection.rows.size(),
+                                       detection.parts_dropped, detection.links),
+                           SecondsSince(start)});
+
+  // Map frame.
+  std::optional<mapio::LocalFrame> frame;
+  geometry::GeoOrigin origin = georeference.origin;
+  if (georeference.kind == Georeference::Kind::kUtm) {
+    std::vector<double> ground(result.terrain->heights_m());
+    std::nth_element(ground.begin(), ground.begin() + static_cast<std::ptrdiff_t>(ground.size() / 2), ground.end());
+    const Eigen::Vector2d centre = 0.5 * (lo + hi);
+    try {
+      GeographicLib::UTMUPS::Reverse(georeference.utm_zone, georeference.utm_north, centre.x(), centre.y(),
+                                     origin.latitude_deg, origin.longitude_deg);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(fmt::format("the cloud's centre ({:.3f}, {:.3f}) is not a valid {} position: {}",
+                                              centre.x(), centre.y(), georeference.Describe(), e.what()));
+    }
+    origin.altitude_m = Round(ground[ground.size() / 2], 0.001);
+    origin.latitude_deg = Round(origin.latitude_deg, 1e-9);
+    origin.longitude_deg = Round(origin.longitude_deg, 1e-9);
+    frame.emplace(origin);
+  }
+  const auto to_map = [&](const Eigen::Vector2d& working) -> Eigen::Vector2d {
+    const Eigen::Vector2d xy = working + result.offset_m;
+    if (!frame) return xy;
+    double lat = 0.0;
+    double lon = 0.0;
+    try {
+      GeographicLib::UTMUPS::Reverse(georeference.utm_zone, georeference.utm_north, xy.x(), xy.y(), lat, lon);
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(fmt::format("({:.3f}, {:.3f}) is not a valid {} position: {}", xy.x(), xy.y(),
+                                              georeference.Describe(), e.what()));
+    }
+    return frame->ToEnu(lat, lon, origin.altitude_m).head<2>();
+  };
+
+  // 5-7. Outline and simplification per part.
+  double outline_seconds = 0.0;
+  double simplify_seconds = 0.0;
+  std::size_t traced_vertices = 0;
+  std::size_t map_vertices = 0;
+  geometry::RowMap map;
+  map.origin = origin;
+  std::size_t row_number = 0;
+  for (const DetectedRow& row : detection.rows) {
+    std::vector<std::pair<PartReport, std::vector<Eigen::Vector2d>>> outlines;
+    for (const RowPart& part : row.parts) {
+      start = Clock::now();
+      const PartOutline outline = TraceOutline(part.points_m, config.outline);
+      outline_seconds += SecondsSince(start);
+      if (outline.polygon_m.size() < 3) {
+        ++result.outlines_failed;
+        continue;
+      }
+      start = Clock::now();
+      SimplifiedPolygon simple = SimplifyPolygon(outline.polygon_m, config.outline.simplify_tolerance_m);
+      if (simple.points_m.size() < 3) simple = SimplifiedPolygon{outline.polygon_m, false};
+      simplify_seconds += SecondsSince(start);
+      PartReport report;
+      report.points = part.points_m.size();
+      report.length_m = outline.length_m;
+      report.traced_vertices = outline.polygon_m.size();
+      report.simplified = simple.simplified;
+      std::vector<Eigen::Vector2d> polygon;
+      for (const auto& p : simple.points_m) polygon.push_back(to_map(p));
+      polygon = DropRepeated(polygon);
+      if (polygon.size() < 3) {
+        ++result.outlines_failed;
+        continue;
+      }
+      report.vertices = polygon.size();
+      traced_vertices += report.traced_vertices;
+      map_vertices += report.vertices;
+      outlines.emplace_back(report, std::move(polygon));
+    }
+    if (outlines.empty()) continue;
+    ++row_number;
+    for (std::size_t k = 0; k < outlines.size(); ++k) {
+      auto& [report, polygon] = outlines[k];
+      report.id = outlines.size() == 1 ? fmt::format("row-{}", row_number)
+                                       : fmt::format("row-{}.part-{}", row_number, k + 1);
+      map.rows.push_back(geometry::Row{report.id, std::move(polygon), true});
+      result.parts.push_back(report);
+    }
+  }
+  result.rows = row_number;
+  result.stages.push_back({"outline: traced", traced_vertices, "vertices", outline_seconds});
+  result.stages.push_back({"simplify: CGAL Polyline_simplification_2", map_vertices, "vertices", simplify_seconds});
+
+  if (map.rows.empty()) {
+    result.message = fmt::format(
+        "no rows found: {} of {} cleaned points in the band {:.2f} +- {:.2f} m above the terrain, {} parts "
+        "found, {} dropped as clutter (rows.min_part_points {}, rows.min_part_length_m {})",
+        band.size(), clean.cloud.points_m.size(), config.band.reference_height_m, config.band.band_half_width_m,
+        detection.parts_found, detection.parts_dropped, config.rows.min_part_points, config.rows.min_part_length_m);
+  } else {
+    result.message = fmt::format("{} rows ({} parts, {} vertices)", result.rows, map.rows.size(), map_vertices);
+    if (result.outlines_failed > 0) {
+      result.message += fmt::format(
+          "; {} parts without an outline (narrower than outline.min_width_m: a lone canopy face? for a sparse "
+          "survey raise rows.link_radius_m)",
+          result.outlines_failed);
+    }
+    result.map = std::move(map);
+  }
+
+  if (keep_canopy) {
+    const double z0 = frame ? origin.altitude_m : 0.0;
+    for (std::size_t i = 0; i < clean.cloud.points_m.size(); ++i) {
+      if (heights[i] <= config.terrain.ground_tolerance_m) continue;
+      const Eigen::Vector3d& p = clean.cloud.points_m[i];
+      const Eigen::Vector2d xy = to_map(p.head<2>());
+      result.canopy_m.points_m.emplace_back(xy.x(), xy.y(), p.z() - z0);
+    }
+  }
+
+  // A sample of the cleaned cloud for the SVG (at most ~20000 points).
+  const std::size_t stride = std::max<std::size_t>(1, clean.cloud.points_m.size() / 20000);
+  for (std::size_t i = 0; i < clean.cloud.points_m.size(); i += stride) {
+    result.cloud_sample_m.push_back(to_map(clean.cloud.points_m[i].head<2>()));
+    result.cloud_sample_height_m.push_back(heights[i]);
+  }
+  return result;
+}
+
+std::string FormatMapSvg(const MapBuildResult& result) {
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  for (const auto& p : result.cloud_sample_m) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  if (result.map) {
+    for (const auto& row : result.map->rows) {
+      for (const auto& p : row.points_m) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    }
+  }
+  if (!lo.allFinite()) {
+    lo = Eigen::Vector2d::Zero();
+    hi = Eigen::Vector2d::Ones();
+  }
+  const double margin = 1.0;
+  lo.array() -= margin;
+  hi.array() += margin;
+  const double scale = 1000.0 / std::max(hi.x() - lo.x(), hi.y() - lo.y());  // pixels per metre
+  const double width = (hi.x() - lo.x()) * scale;
+  const double height = (hi.y() - lo.y()) * scale;
+  const auto px = [&](const Eigen::Vector2d& p) {
+    return fmt::format("{:.1f},{:.1f}", (p.x() - lo.x()) * scale, (hi.y() - p.y()) * scale);
+  };
+  std::string svg = fmt::format(
+      "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" height=\"{:.0f}\" viewBox=\"0 0 {:.1f} {:.1f}\">\n"
+      "<title>rowloc map build: {}</title>\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
+      width, height + 40.0, width, height + 40.0, result.message);
+  svg += "<g stroke=\"none\">\n";
+  for (std::size_t i = 0; i < result.cloud_sample_m.size(); ++i) {
+    const double h = std::clamp(result.cloud_sample_height_m[i] / 2.5, 0.0, 1.0);
+    const int green = static_cast<int>(200 - 120 * h);
+    const auto [x, y] = std::make_pair((result.cloud_sample_m[i].x() - lo.x()) * scale,
+                                       (hi.y() - result.cloud_sample_m[i].y()) * scale);
+    svg += fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"0.8\" fill=\"rgb({},{},{})\"/>\n", x, y,
+                       static_cast<int>(150 - 100 * h), green, static_cast<int>(150 - 100 * h));
+  }
+  svg += "</g>\n<g fill=\"none\" stroke=\"#d62728\" stroke-width=\"1.2\">\n";
+  if (result.map) {
+    for (const auto& row : result.map->rows) {
+      svg += "<polygon points=\"";
+      for (const auto& p : row.points_m) svg += px(p) + " ";
+      svg += fmt::format("\"><title>{}</title></polygon>\n", row.id);
+    }
+  }
+  svg += "</g>\n";
+  // Scale bar: 5 m.
+  svg += fmt::format(
+      "<g font-family=\"sans-serif\" font-size=\"14\"><line x1=\"10\" y1=\"{0:.1f}\" x2=\"{1:.1f}\" y2=\"{0:.1f}\" "
+      "stroke=\"black\" stroke-width=\"2\"/><text x=\"{2:.1f}\" y=\"{3:.1f}\">5 m</text>"
+      "<text x=\"10\" y=\"{4:.1f}\">{5} (outlines red; cloud green, darker = higher)</text></g>\n</svg>\n",
+      height + 15.0, 10.0 + 5.0 * scale, 15.0 + 5.0 * scale, height + 20.0, height + 36.0, result.message);
+  return svg;
+}
+
+MapBuildResult RunMapBuild(const MapBuildRequest& request) {
+  auto start = Clock::now();
+  const PointCloud cloud = ReadPointCloud(request.survey_path);
+  const double read_seconds = SecondsSince(start);
+  MapBuildResult result =
+      BuildRowMap(cloud, request.config, request.georeference, request.octomap_resolution_m.has_value());
+  result.stages.insert(result.stages.begin(), StageReport{"read", cloud.points_m.size(), "points", read_seconds});
+
+  start = Clock::now();
+  std::error_code ec;
+  std::filesystem::create_directories(request.output_dir, ec);
+  if (ec) throw std::system_error(ec, "cannot create " + request.output_dir.string());
+  const std::filesystem::path map_path = request.output_dir / "row-map.geojson";
+  if (result.map) {
+    mapio::WriteRowMapGeoJson(*result.map, map_path);
+  } else {
+    std::filesystem::remove(map_path, ec);  // never leave a stale map next to a "no rows" report
+  }
+
+  // DTM, in the cloud's coordinates.
+  const TerrainGrid& dtm = *result.terrain;
+  nlohmann::ordered_json dtm_json;
+  dtm_json["frame"] = request.georeference.kind == Georeference::Kind::kUtm
+                          ? request.georeference.Describe()
+                          : request.georeference.Describe() + " (the survey's coordinates)";
+  dtm_json["origin_m"] = {dtm.origin_m().x() + result.offset_m.x(), dtm.origin_m().y() + result.offset_m.y()};
+  dtm_json["cell_size_m"] = dtm.cell_size_m();
+  dtm_json["nx"] = dtm.nx();
+  dtm_json["ny"] = dtm.ny();
+  dtm_json["layout"] = "heights_m[j * nx + i] at origin + ((i + 0.5), (j + 0.5)) * cell_size_m; bilinear between centres";
+  nlohmann::ordered_json heights = nlohmann::ordered_json::array();
+  for (double h : dtm.heights_m()) heights.push_back(Round(h, 0.001));
+  dtm_json["heights_m"] = std::move(heights);
+  std::string ground;
+  for (bool g : dtm.ground()) ground.push_back(g ? '1' : '0');
+  dtm_json["ground_cells"] = ground;
+  WriteText(request.output_dir / "dtm.json", dtm_json.dump() + "\n");
+  WriteText(request.output_dir / "map.svg", FormatMapSvg(result));
+  result.stages.push_back({"write", result.map ? result.map->SegmentCount() : 0, "segments", SecondsSince(start)});
+  const std::filesystem::path octomap_path = request.output_dir / "canopy.bt";
+  if (request.octomap_resolution_m) {
+    start = Clock::now();
+    if (result.canopy_m.points_m.empty()) throw std::invalid_argument("no canopy points for the OctoMap");
+    const OctoMapSummary octomap =
+        WriteOctoMap(result.canopy_m, OctoMapOptions{*request.octomap_resolution_m}, octomap_path);
+    result.stages.push_back({"octomap: canopy.bt", octomap.occupied_leaves, "voxels", SecondsSince(start)});
+    PointCloud().points_m.swap(result.canopy_m.points_m);
+  } else {
+    std::filesystem::remove(octomap_path, ec);
+  }
+
+  // Report.
+  std::error_code size_error;
+  const auto cloud_bytes = std::filesystem::file_size(request.survey_path, size_error);
+  const std::uintmax_t map_bytes = result.map ? std::filesystem::file_size(map_path) : 0;
+  double total_seconds = 0.0;
+  for (const auto& s : result.stages) total_seconds += s.seconds;
+  nlohmann::ordered_json report;
+  report["survey"] = request.survey_path.string();
+  report["georeference"] = request.georeference.Describe();
+  report["config"] = request.config_source;
+  report["result"] = result.message;
+  report["rows"] = result.rows;
+  report["parts"] = result.parts.size();
+  report["points_in"] = result.points_in;
+  report["cloud_bytes"] = size_error ? 0 : cloud_bytes;
+  report["map_bytes"] = map_bytes;
+  report["data_reduction"] = map_bytes > 0 && !size_error ? static_cast<double>(cloud_bytes) / map_bytes : 0.0;
+  report["total_seconds"] = total_seconds;
+  nlohmann::ordered_json stages = nlohmann::ordered_json::array();
+  for (const auto& s : result.stages) {
+    stages.push_back({{"stage", s.name}, {"count", s.points}, {"unit", s.unit}, {"seconds", s.seconds}});
+  }
+  report["stages"] = std::move(stages);
+  nlohmann::ordered_json parts = nlohmann::ordered_json::array();
+  for (const auto& p : result.parts) {
+    parts.push_back({{"id", p.id}, {"points", p.points}, {"length_m", Round(p.length_m, 0.001)},
+                     {"traced_vertices", p.traced_vertices}, {"vertices", p.vertices}, {"simplified", p.simplified}});
+  }
+  report["row_parts"] = std::move(parts);
+  report["outlines_failed"] = result.outlines_failed;
+  WriteText(request.output_dir / "report.json", report.dump(2) + "\n");
+
+  std::string text = fmt::format("rowloc map build\n  survey: {} ({} points, {} bytes)\n  georeference: {}\n  config: {}\n"
+                                 "  result: {}\n\n",
+                                 request.survey_path.string(), result.points_in, size_error ? 0 : cloud_bytes,
+                                 request.georeference.Describe(), request.config_source, result.message);
+  text += "  stage                                        count  unit                                 time [s]\n";
+  for (const auto& s : result.stages) {
+    text += fmt::format("  {:<44} {:>7}  {:<36} {:8.3f}\n", s.name, s.points, s.unit, s.seconds);
+  }
+  text += fmt::format("  {:<44} {:>7}  {:<36} {:8.3f}\n\n", "total", "", "", total_seconds);
+  if (!result.parts.empty()) {
+    text += "  part                 points  length [m]  traced  vertices  simplified\n";
+    for (const auto& p : result.parts) {
+      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>6}  {:>8}  {}\n", p.id, p.points, p.length_m,
+                          p.traced_vertices, p.vertices, p.simplified ? "yes" : "no (not simple)");
+    }
+    text += fmt::format("\n  map: {} ({} bytes); data reduction {:.0f} : 1\n", map_path.string(), map_bytes,
+                        report["data_reduction"].get<double>());
+  }
+  WriteText(request.output_dir / "report.txt", text);
+  return result;
+}
+
+}  // namespace rowloc::mapping

@@ -1,0 +1,228 @@
+// Ground classification and DTM (see terrain_grid.hpp). Plain C++ and Eigen.
+#include "rowloc/mapping/terrain_grid.hpp"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace rowloc::mapping {
+
+TerrainGrid::TerrainGrid(Eigen::Vector2d origin_m, double cell_size_m, int nx, int ny,
+                         std::vector<double> heights_m, std::vector<bool> ground)
+    : origin_m_(std::move(origin_m)),
+      cell_size_m_(cell_size_m),
+      nx_(nx),
+      ny_(ny),
+      heights_m_(std::move(heights_m)),
+      ground_(std::move(ground)) {
+  if (!(cell_size_m_ > 0.0) || !std::isfinite(cell_size_m_) || nx_ < 1 || ny_ < 1 ||
+      !origin_m_.allFinite()) {
+    throw std::invalid_argument("TerrainGrid: cell size, counts or origin invalid");
+  }
+  const auto cells = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
+  if (heights_m_.size() != cells || ground_.size() != cells) {
+    throw std::invalid_argument("TerrainGrid: " + std::to_string(cells) + " cells, got " +
+                                std::to_string(heights_m_.size()) + " heights and " +
+                                std::to_string(ground_.size()) + " ground flags");
+  }
+  for (double h : heights_m_) {
+    if (!std::isfinite(h)) throw std::invalid_argument("TerrainGrid: non-finite height");
+  }
+}
+
+double TerrainGrid::HeightAt(const Eigen::Vector2d& xy_m) const {
+  // Continuous cell coordinates of the centres: centre of cell i at u = i.
+  const double u = std::clamp((xy_m.x() - origin_m_.x()) / cell_size_m_ - 0.5, 0.0, nx_ - 1.0);
+  const double v = std::clamp((xy_m.y() - origin_m_.y()) / cell_size_m_ - 0.5, 0.0, ny_ - 1.0);
+  const int i0 = std::min(static_cast<int>(u), nx_ - 1);
+  const int j0 = std::min(static_cast<int>(v), ny_ - 1);
+  const int i1 = std::min(i0 + 1, nx_ - 1);
+  const int j1 = std::min(j0 + 1, ny_ - 1);
+  const double fu = u - i0;
+  const double fv = v - j0;
+  const auto at = [&](int i, int j) { return heights_m_[static_cast<std::size_t>(j) * nx_ + i]; };
+  return (1 - fv) * ((1 - fu) * at(i0, j0) + fu * at(i1, j0)) + fv * ((1 - fu) * at(i0, j1) + fu * at(i1, j1));
+}
+
+std::size_t TerrainGrid::GroundCellCount() const {
+  return static_cast<std::size_t>(std::count(ground_.begin(), ground_.end(), true));
+}
+
+TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& params) {
+  if (cloud.points_m.empty()) throw std::invalid_argument("BuildTerrainGrid: empty cloud");
+  if (!(params.cell_size_m >= 0.05 && params.cell_size_m <= 20.0) ||
+      !(params.classification_radius_m > 0.0) || !(params.ground_tolerance_m > 0.0) ||
+      !(params.ground_thickness_m >= 0.0) || params.smoothing_passes < 0) {
+    throw std::invalid_argument("BuildTerrainGrid: parameter outside its domain");
+  }
+  const double cell = params.cell_size_m;
+  Eigen::Vector2d lo = cloud.points_m.front().head<2>();
+  Eigen::Vector2d hi = lo;
+  for (const auto& p : cloud.points_m) {
+    lo = lo.cwiseMin(p.head<2>());
+    hi = hi.cwiseMax(p.head<2>());
+  }
+  const double fx = std::floor((hi.x() - lo.x()) / cell) + 1.0;
+  const double fy = std::floor((hi.y() - lo.y()) / cell) + 1.0;
+  if (fx * fy > 1e8) {
+    throw std::invalid_argument("BuildTerrainGrid: the grid would have " + std::to_string(fx * fy) +
+                                " cells (more than 10^8); use a larger terrain.cell_size_m");
+  }
+  const int nx = static_cast<int>(fx);
+  const int ny = static_cast<int>(fy);
+  const std::size_t cells = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const auto cell_of = [&](const Eigen::Vector3d& p) {
+    const int i = std::min(nx - 1, static_cast<int>((p.x() - lo.x()) / cell));
+    const int j = std::min(ny - 1, static_cast<int>((p.y() - lo.y()) / cell));
+    return static_cast<std::size_t>(j) * nx + i;
+  };
+
+  // 1. Lowest point per cell.
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> z_min(cells, inf);
+  for (const auto& p : cloud.points_m) {
+    double& z = z_min[cell_of(p)];
+    z = std::min(z, p.z());
+  }
+
+  // 2. Robust local lower-envelope plane per occupied cell.
+  const int r = std::max(1, static_cast<int>(std::ceil(params.classification_radius_m / cell)));
+  const double r2 = params.classification_radius_m * params.classification_radius_m;
+  std::vector<bool> ground(cells, false);
+  std::vector<std::pair<Eigen::Vector2d, double>> neighbours;
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      const std::size_t c = static_cast<std::size_t>(j) * nx + i;
+      if (z_min[c] == inf) continue;
+      neighbours.clear();
+      for (int dj = -r; dj <= r; ++dj) {
+        for (int di = -r; di <= r; ++di) {
+          const int ii = i + di;
+          const int jj = j + dj;
+          if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
+          const Eigen::Vector2d d(di * cell, dj * cell);
+          if (d.squaredNorm() > r2) continue;
+          const double z = z_min[static_cast<std::size_t>(jj) * nx + ii];
+          if (z != inf) neighbours.emplace_back(d, z);
+        }
+      }
+      // Start from the lowest neighbour as a level plane, then refit on the cells below plane + tol.
+      double a = inf;
+      for (const auto& n : neighbours) a = std::min(a, n.second);
+      Eigen::Vector3d plane(a + 0.5 * params.ground_tolerance_m, 0.0, 0.0);
+      for (int iteration = 0; iteration < 5; ++iteration) {
+        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        int used = 0;
+        for (const auto& [d, z] : neighbours) {
+          const double predicted = plane[0] + plane[1] * d.x() + plane[2] * d.y();
+          if (z - predicted > params.ground_tolerance_m) continue;
+          const Eigen::Vector3d row(1.0, d.x(), d.y());
+          ata += row * row.transpose();
+          atb += row * z;
+          ++used;
+        }
+        if (used == 0) break;
+        // Regularize the slopes (few or collinear cells): a level plane unless the data say otherwise.
+        ata(1, 1) += 1e-3;
+        ata(2, 2) += 1e-3;
+        plane = ata.ldlt().solve(atb);
+      }
+      ground[c] = z_min[c] - plane[0] <= params.ground_tolerance_m;
+    }
+  }
+
+  // 3. Ground height per ground cell: median of the points within ground_thickness of z_min.
+  std::vector<std::vector<double>> low_points(cells);
+  for (const auto& p : cloud.points_m) {
+    const std::size_t c = cell_of(p);
+    if (ground[c] && p.z() <= z_min[c] + params.ground_thickness_m) low_points[c].push_back(p.z());
+  }
+  std::vector<double> height(cells, 0.0);
+  std::vector<bool> filled(cells, false);
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (!ground[c]) continue;
+    auto& v = low_points[c];
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    height[c] = v[v.size() / 2];
+    filled[c] = true;
+  }
+  std::vector<std::vector<double>>().swap(low_points);
+
+  // 4. Fill outward from the ground cells, then smooth.
+  if (std::none_of(filled.begin(), filled.end(), [](bool f) { return f; })) {
+    // No ground at all (cannot happen: the lowest cell is always ground); keep a level terrain.
+    const double lowest = *std::min_element(z_min.begin(), z_min.end());
+    std::fill(height.begin(), height.end(), lowest);
+    std::fill(filled.begin(), filled.end(), true);
+  }
+  bool missing = true;
+  while (missing) {
+    missing = false;
+    std::vector<double> next = height;
+    std::vector<bool> next_filled = filled;
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t c = static_cast<std::size_t>(j) * nx + i;
+        if (filled[c]) continue;
+        double sum = 0.0;
+        int count = 0;
+        for (int dj = -1; dj <= 1; ++dj) {
+          for (int di = -1; di <= 1; ++di) {
+            const int ii = i + di;
+            const int jj = j + dj;
+            if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
+            const std::size_t n = static_cast<std::size_t>(jj) * nx + ii;
+            if (filled[n]) {
+              sum += height[n];
+              ++count;
+            }
+          }
+        }
+        if (count > 0) {
+          next[c] = sum / count;
+          next_filled[c] = true;
+        } else {
+          missing = true;
+        }
+      }
+    }
+    height = std::move(next);
+    filled = std::move(next_filled);
+  }
+  for (int pass = 0; pass < params.smoothing_passes; ++pass) {
+    std::vector<double> next(cells, 0.0);
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        double sum = 0.0;
+        int count = 0;
+        for (int dj = -1; dj <= 1; ++dj) {
+          for (int di = -1; di <= 1; ++di) {
+            const int ii = i + di;
+            const int jj = j + dj;
+            if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
+            sum += height[static_cast<std::size_t>(jj) * nx + ii];
+            ++count;
+          }
+        }
+        next[static_cast<std::size_t>(j) * nx + i] = sum / count;
+      }
+    }
+    height = std::move(next);
+  }
+  return TerrainGrid(lo, cell, nx, ny, std::move(height), std::move(ground));
+}
+
+std::vector<double> HeightsAboveTerrain(const PointCloud& cloud, const TerrainGrid& terrain) {
+  std::vector<double> h;
+  h.reserve(cloud.points_m.size());
+  for (const auto& p : cloud.points_m) h.push_back(p.z() - terrain.HeightAt(p.head<2>()));
+  return h;
+}
+
+}  // namespace rowloc::mapping

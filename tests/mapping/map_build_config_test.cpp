@@ -1,0 +1,91 @@
+// MapBuildConfig: the shipped default file, strict reading, domains, round trip.
+#include "rowloc/mapping/map_build_config.hpp"
+
+#include "test_support.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <string>
+
+namespace rowloc::mapping {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string Load(const std::filesystem::path& path) {
+  try {
+    LoadMapBuildConfig(path);
+  } catch (const MapBuildConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+class MapBuildConfigFileTest : public ::testing::Test {
+ protected:
+  std::filesystem::path Write(const std::string& text) {
+    const auto path = dir_ / "config.json";
+    std::ofstream(path) << text;
+    return path;
+  }
+  std::string Default() const { return FormatMapBuildConfig(MapBuildConfig{}); }
+  test::ScratchDir dir_;
+};
+
+TEST(MapBuildConfigTest, ShippedDefaultFileEqualsTheBuiltInDefaults) {
+  const MapBuildConfig shipped = LoadMapBuildConfig(test::SourceDir() / "config/mapping/default.json");
+  EXPECT_EQ(FormatMapBuildConfig(shipped), FormatMapBuildConfig(MapBuildConfig{}));
+}
+
+TEST(MapBuildConfigTest, DefaultsAreValid) { EXPECT_FALSE(ValidateMapBuildConfig(MapBuildConfig{}).has_value()); }
+
+TEST(MapBuildConfigTest, ValidateNamesTheKeyOutsideItsDomain) {
+  MapBuildConfig config;
+  config.rows.max_gap_m = -1.0;
+  const auto problem = ValidateMapBuildConfig(config);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_THAT(*problem, HasSubstr("rows.max_gap_m"));
+  config = MapBuildConfig{};
+  config.outline.edge_quantile = 1.5;
+  EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("outline.edge_quantile"));
+}
+
+TEST_F(MapBuildConfigFileTest, FormatThenLoadRoundTrips) {
+  MapBuildConfig config;
+  config.band.reference_height_m = 1.25;
+  config.rows.min_part_points = 42;
+  const MapBuildConfig back = LoadMapBuildConfig(Write(FormatMapBuildConfig(config)));
+  EXPECT_EQ(back.band.reference_height_m, 1.25);
+  EXPECT_EQ(back.rows.min_part_points, 42);
+  EXPECT_EQ(FormatMapBuildConfig(back), FormatMapBuildConfig(config));
+}
+
+TEST_F(MapBuildConfigFileTest, UnknownKeyIsAnErrorNamingFileAndKey) {
+  std::string text = Default();
+  text.replace(text.find("\"max_gap_m\""), 11, "\"max_gap\"");
+  const auto path = Write(text);
+  const std::string error = Load(path);
+  EXPECT_THAT(error, HasSubstr(path.string()));
+  EXPECT_THAT(error, HasSubstr("rows.max_gap"));
+}
+
+TEST_F(MapBuildConfigFileTest, OutOfRangeAndWrongTypeAreErrors) {
+  std::string text = Default();
+  const auto at = text.find("\"voxel_size_m\": 0.02");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_THAT(Load(Write(std::string(text).replace(at, 20, "\"voxel_size_m\": -1"))),
+              HasSubstr("clean.voxel_size_m: must be in [0, 1], got -1"));
+  EXPECT_THAT(Load(Write(std::string(text).replace(at, 20, "\"voxel_size_m\": \"x\""))),
+              HasSubstr("clean.voxel_size_m: must be a number"));
+  EXPECT_THAT(Load(Write("{\"clean\": {}}")), HasSubstr("terrain: missing key"));
+  std::string no_voxel = text;
+  no_voxel.replace(at, 21, "");
+  EXPECT_THAT(Load(Write(no_voxel)), HasSubstr("clean.voxel_size_m: missing key"));
+  EXPECT_THAT(Load(Write("{ not json")), HasSubstr("invalid JSON"));
+  EXPECT_THAT(Load(dir_ / "nonexistent.json"), HasSubstr("nonexistent.json: cannot open"));
+}
+
+}  // namespace
+}  // namespace rowloc::mapping

@@ -1,0 +1,80 @@
+// CompareRowMaps: identical maps, a shift, a missed and an invented row, different origins.
+#include "rowloc/mapping/map_comparison.hpp"
+
+#include "rowloc/mapio/local_frame.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+namespace rowloc::mapping {
+namespace {
+
+geometry::Row Box(const std::string& id, double x0, double x1, double y, double w = 0.25) {
+  return geometry::Row{id, {{x0, y - w}, {x1, y - w}, {x1, y + w}, {x0, y + w}}, true};
+}
+
+geometry::RowMap Map(std::vector<geometry::Row> rows) {
+  geometry::RowMap map;
+  map.origin = {45.0, 7.0, 200.0};
+  map.rows = std::move(rows);
+  return map;
+}
+
+TEST(MapComparisonTest, IdenticalMapsAreAtZero) {
+  const auto map = Map({Box("row-1", 0, 10, 0), Box("row-2.part-1", 0, 4, 2.5), Box("row-2.part-2", 5, 10, 2.5)});
+  const MapComparison c = CompareRowMaps(map, map);
+  EXPECT_EQ(c.truth_rows, 2U);
+  EXPECT_EQ(c.truth_parts, 3U);
+  EXPECT_EQ(c.truth_parts_found, 3U);
+  EXPECT_EQ(c.truth_rows_found, 2U);
+  EXPECT_TRUE(c.missed.empty());
+  EXPECT_TRUE(c.invented.empty());
+  EXPECT_NEAR(c.p95_m, 0.0, 1e-12);
+  EXPECT_NEAR(c.max_m, 0.0, 1e-12);
+  ASSERT_EQ(c.matches.size(), 3U);
+  EXPECT_EQ(c.matches[1].truth_id, "row-2.part-1");
+}
+
+TEST(MapComparisonTest, AShiftAcrossTheRowsIsMeasured) {
+  // Built 1 cm north of the truth: long faces are 1 cm away, the caps' samples near 0 .. 1 cm.
+  const auto truth = Map({Box("a", 0, 20, 0)});
+  const auto built = Map({Box("a", 0, 20, 0.01)});
+  const MapComparison c = CompareRowMaps(built, truth);
+  EXPECT_NEAR(c.p95_m, 0.01, 1e-9);
+  EXPECT_NEAR(c.max_m, 0.01, 1e-9);
+}
+
+TEST(MapComparisonTest, MissedAndInventedRowsAreNamed) {
+  const auto truth = Map({Box("row-1", 0, 10, 0), Box("row-2", 0, 10, 2.5)});
+  const auto built = Map({Box("row-1", 0, 10, 0), Box("row-9", 0, 10, 6.0)});
+  const MapComparison c = CompareRowMaps(built, truth);
+  EXPECT_EQ(c.missed, std::vector<std::string>{"row-2"});
+  EXPECT_EQ(c.invented, std::vector<std::string>{"row-9"});
+  EXPECT_EQ(c.truth_rows_found, 1U);
+  EXPECT_NEAR(c.max_m, 2.5 + 0.0, 1.0);  // an unmatched row is far from everything
+  EXPECT_THAT(FormatMapComparison(c), ::testing::HasSubstr("missed: row-2"));
+  EXPECT_THAT(FormatMapComparisonJson(c), ::testing::HasSubstr("\"invented\": [\n    \"row-9\""));
+}
+
+TEST(MapComparisonTest, DifferentOriginsAreComparedThroughWgs84) {
+  const auto truth = Map({Box("a", 0, 20, 0)});
+  // The same rectangle expressed around an origin 100 m east and 50 m north.
+  const mapio::LocalFrame frame(truth.origin);
+  const geometry::GeoOrigin moved = frame.ToGeodetic({100.0, 50.0, 0.0});
+  const mapio::LocalFrame other(moved);
+  geometry::RowMap built = truth;
+  built.origin = moved;
+  for (auto& p : built.rows[0].points_m) {
+    const auto g = frame.ToGeodetic({p.x(), p.y(), 0.0});
+    p = other.ToEnu(g.latitude_deg, g.longitude_deg, g.altitude_m).head<2>();
+  }
+  const MapComparison c = CompareRowMaps(built, truth);
+  EXPECT_LT(c.max_m, 1e-3);
+  EXPECT_THROW(CompareRowMaps(built, truth, MapComparisonParams{0.0, 0.3}), std::invalid_argument);
+  EXPECT_THROW(CompareRowMaps(Map({}), truth), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace rowloc::mapping
