@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -52,6 +53,28 @@ double TerrainGrid::HeightAt(const Eigen::Vector2d& xy_m) const {
 std::size_t TerrainGrid::GroundCellCount() const {
   return static_cast<std::size_t>(std::count(ground_.begin(), ground_.end(), true));
 }
+
+namespace {
+
+/// The mean height of cell (i, j) and its eight neighbours inside the grid, counting only filled
+/// cells when `filled` is given; nullopt when none counts.
+std::optional<double> NeighbourMean(const std::vector<double>& height, int nx, int ny, int i, int j,
+                                    const std::vector<bool>* filled) {
+  double sum = 0.0;
+  int count = 0;
+  for (int jj = std::max(j - 1, 0); jj <= std::min(j + 1, ny - 1); ++jj) {
+    for (int ii = std::max(i - 1, 0); ii <= std::min(i + 1, nx - 1); ++ii) {
+      const std::size_t n = static_cast<std::size_t>(jj) * nx + ii;
+      if (filled && !(*filled)[n]) continue;
+      sum += height[n];
+      ++count;
+    }
+  }
+  if (count == 0) return std::nullopt;
+  return sum / count;
+}
+
+}  // namespace
 
 TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& params) {
   if (cloud.points_m.empty()) throw std::invalid_argument("BuildTerrainGrid: empty cloud");
@@ -170,22 +193,8 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
       for (int i = 0; i < nx; ++i) {
         const std::size_t c = static_cast<std::size_t>(j) * nx + i;
         if (filled[c]) continue;
-        double sum = 0.0;
-        int count = 0;
-        for (int dj = -1; dj <= 1; ++dj) {
-          for (int di = -1; di <= 1; ++di) {
-            const int ii = i + di;
-            const int jj = j + dj;
-            if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
-            const std::size_t n = static_cast<std::size_t>(jj) * nx + ii;
-            if (filled[n]) {
-              sum += height[n];
-              ++count;
-            }
-          }
-        }
-        if (count > 0) {
-          next[c] = sum / count;
+        if (const std::optional<double> mean = NeighbourMean(height, nx, ny, i, j, &filled)) {
+          next[c] = *mean;
           next_filled[c] = true;
         } else {
           missing = true;
@@ -199,18 +208,7 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     std::vector<double> next(cells, 0.0);
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
-        double sum = 0.0;
-        int count = 0;
-        for (int dj = -1; dj <= 1; ++dj) {
-          for (int di = -1; di <= 1; ++di) {
-            const int ii = i + di;
-            const int jj = j + dj;
-            if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
-            sum += height[static_cast<std::size_t>(jj) * nx + ii];
-            ++count;
-          }
-        }
-        next[static_cast<std::size_t>(j) * nx + i] = sum / count;
+        next[static_cast<std::size_t>(j) * nx + i] = *NeighbourMean(height, nx, ny, i, j, nullptr);
       }
     }
     height = std::move(next);

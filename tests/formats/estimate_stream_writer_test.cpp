@@ -6,6 +6,8 @@
 #include "rowloc/formats/trajectory_streams.hpp"
 
 #include <gmock/gmock.h>
+#include "json_lines.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -19,13 +21,7 @@ namespace {
 
 using nlohmann::json;
 
-std::vector<json> Lines(const std::string& text) {
-  std::vector<json> lines;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) lines.push_back(json::parse(line));
-  return lines;
-}
+std::vector<json> Lines(const std::string& text) { return rowloc::test::ParseJsonLines(text); }
 
 TEST(EstimateLogWriter, WritesCovarianceOfTheGivenDimension) {
   std::ostringstream out;

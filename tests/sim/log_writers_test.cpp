@@ -1,6 +1,8 @@
 // Tests of the simulator's sensor-log and truth writers of docs/protocol.md (sim/log_writers.hpp).
 #include "rowloc/sim/log_writers.hpp"
 
+#include "json_lines.hpp"
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -25,13 +27,7 @@ formats::LogHeader TwoWheelHeader() {
   return h;
 }
 
-std::vector<json> Lines(const std::string& text) {
-  std::vector<json> lines;
-  std::istringstream in(text);
-  std::string line;
-  while (std::getline(in, line)) lines.push_back(json::parse(line));
-  return lines;
-}
+std::vector<json> Lines(const std::string& text) { return rowloc::test::ParseJsonLines(text); }
 
 TEST(SensorLogWriter, WritesHeaderThenMessagesInDocumentedKeyOrder) {
   std::ostringstream out;
