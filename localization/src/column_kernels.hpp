@@ -4,20 +4,22 @@
 //
 // ROWLOC_VECTOR_CLONES: put before a kernel (loops over raw pointers; Eigen only for coefficient
 // access) to build it twice, for baseline x86-64 (SSE2, 2 doubles per instruction) and for AVX2
-// (4), the copy chosen once at load time by the CPU (GCC/Clang target_clones, an ifunc). Only code
+// (4), the copy chosen once at load time by the CPU (GCC target_clones, an ifunc). Only code
 // inlined into the kernel gets AVX2; out-of-line functions it calls keep the baseline target.
 // Eigen's own code is not affected: its vector width is fixed at compile time, and the project
 // never builds with -march
 // (cmake/RowlocOptions.cmake). AVX2 does not bring FMA, and the project builds with
 // -ffp-contract=off, so both copies round every operation alike: results (and replays) do not
-// depend on the machine. Elsewhere (other architectures, other compilers) the macro is empty.
+// depend on the machine. Elsewhere (other architectures, other compilers) the macro is empty; so it
+// is with clang (the fuzz preset), whose target_clones (clang 14) takes neither function templates
+// nor member functions defined out of their class.
 #pragma once
 
 #include <Eigen/Core>
 
 #include <cstring>
 
-#if defined(__x86_64__) && defined(__GNUC__) && defined(__has_attribute)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__has_attribute)
 #if __has_attribute(target_clones)
 #define ROWLOC_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #endif
@@ -34,9 +36,10 @@
 #define ROWLOC_INLINE inline
 #endif
 
-// Double4 below: GCC reports -Wpsabi at the end of the translation unit, so it is silenced for the
-// rest of each (internal) file that includes this header, not between a push and a pop.
-#if defined(__GNUC__) && !defined(__clang__)
+// Double4 below: GCC (and clang) report -Wpsabi at the end of the translation unit, so it is
+// silenced for the rest of each (internal) file that includes this header, not between a push and
+// a pop.
+#if defined(__GNUC__)
 #pragma GCC diagnostic ignored "-Wpsabi"
 #endif
 

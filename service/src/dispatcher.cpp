@@ -22,6 +22,11 @@ using OrderedJson = nlohmann::ordered_json;
 
 constexpr std::size_t kMaxIdBytes = 128;
 constexpr std::size_t kMaxConfigFileBytes = 4 << 20;
+/// Deepest nesting of arrays and objects in a request line (the deepest real request, an inline
+/// configuration, has about 5 levels). nlohmann parses any depth, but copying or dumping a value
+/// recurses once per level: a header nested 32k levels deep overflowed the stack (found by
+/// fuzz/service_dispatch_fuzz.cpp), and a 1 MiB line can nest 500k.
+constexpr std::size_t kMaxNestingDepth = 64;
 
 const std::vector<std::string_view> kSensorTypes = {"gps", "imu", "wheels", "steering", "ultrasonic", "vio"};
 
@@ -30,6 +35,31 @@ bool IsSensorType(std::string_view type) {
 }
 
 [[noreturn]] void Fail(ErrorCode code, const std::string& message) { throw ServiceError(code, message); }
+
+/// True when arrays and objects nest deeper than `limit` in `line` (brackets inside strings do not
+/// count). Exact for valid JSON; a malformed line may be refused by this instead of by the parser.
+bool NestedDeeperThan(std::string_view line, std::size_t limit) {
+  std::size_t depth = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : line) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > limit) return true;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return false;
+}
 
 /// The value of a required key of the request.
 const Json& Required(const Json& request, const char* key) {
@@ -253,6 +283,10 @@ void Dispatcher::HandleLine(ClientContext& client, std::string_view line, std::s
   ++stats_.lines;
   Json id = nullptr;
   try {
+    if (NestedDeeperThan(line, kMaxNestingDepth)) {
+      Fail(ErrorCode::kLimitExceeded, "arrays and objects nested deeper than " + std::to_string(kMaxNestingDepth) +
+                                          " levels");
+    }
     Json request;
     try {
       request = Json::parse(line);

@@ -219,6 +219,22 @@ TEST_F(DispatcherTest, LimitsOnSessionsAndInlineConfigs) {
   ExpectError(client, open.dump(), "limit_exceeded");
 }
 
+// Found by fuzz/service_dispatch_fuzz.cpp: a header nested 32k levels deep overflowed the stack
+// (nlohmann copies and dumps recursively); a 1 MiB line nests up to 500k levels. Lines nested
+// deeper than 64 levels are refused before they are parsed.
+TEST_F(DispatcherTest, LinesNestedDeeperThan64LevelsAreRefused) {
+  TestClient client(*dispatcher_);
+  const auto nested = [](std::size_t levels) { return std::string(levels, '[') + std::string(levels, ']'); };
+  ExpectError(client, R"({"type":"open_session","vehicle":"differential","header":{"origin":)" + nested(500000) + "}}",
+              "limit_exceeded");
+  ExpectError(client, R"({"type":"open_session","vehicle_config":{"a":)" + nested(500000) + "}}", "limit_exceeded");
+  ExpectError(client, nested(500000), "limit_exceeded");
+  // 64 levels, the request object included, pass; brackets inside strings do not count.
+  EXPECT_EQ(client.Send(json::parse(R"({"type":"hello","x":)" + nested(63) + "}"))["type"], "hello");
+  ExpectError(client, R"({"type":"hello","x":)" + nested(64) + "}", "limit_exceeded");
+  EXPECT_EQ(client.Send({{"type", "hello"}, {"client", std::string(1000, '[') + "\\\"{"}})["type"], "hello");
+}
+
 TEST_F(DispatcherTest, TokenIsRequiredBeforeAnythingElse) {
   rowloc::test::ScratchDir dir;
   std::ofstream(dir / "token") << "s3cret-token\n";
