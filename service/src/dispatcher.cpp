@@ -1,8 +1,10 @@
 // Request handling of the service (see dispatcher.hpp; the protocol is docs/service.md).
 #include "rowloc/service/dispatcher.hpp"
 
+#include "rowloc/formats/ndjson_writing.hpp"
 #include "rowloc/formats/sensor_log_reader.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/service/named_files.hpp"
@@ -142,9 +144,9 @@ geometry::GeoOrigin OriginOf(const Json& value, const char* key) {
     return v.get<double>();
   };
   origin = {number("latitude_deg"), number("longitude_deg"), number("altitude_m")};
-  if (std::abs(origin.latitude_deg) > 90 || std::abs(origin.longitude_deg) > 180) {
-    Fail(ErrorCode::kInvalidField, std::string(key) + ": latitude or longitude out of range");
-  }
+  const std::string problem =
+      mapio::GeodeticPositionProblem(origin.latitude_deg, origin.longitude_deg, origin.altitude_m);
+  if (!problem.empty()) Fail(ErrorCode::kInvalidField, std::string(key) + ": " + problem);
   return origin;
 }
 
@@ -209,9 +211,7 @@ std::string JournalHeaderLine(const SessionSpec& spec, const std::string& vehicl
   j["source"] = "rowloc serve";
   j["scenario"] = spec.name;
   j["vehicle"] = vehicle_name;
-  j["origin"] = {{"latitude_deg", spec.header.origin.latitude_deg},
-                 {"longitude_deg", spec.header.origin.longitude_deg},
-                 {"altitude_m", spec.header.origin.altitude_m}};
+  j["origin"] = formats::ndjson::OriginJson(spec.header.origin);
   j["wheels"] = spec.header.wheels;
   j["ultrasonic"] = spec.header.ultrasonic;
   j["session"] = spec.name;
@@ -545,10 +545,7 @@ Dispatcher::OrderedJson Dispatcher::OpenSession(const Json& request) {
                           {"filter", opened.filter.empty() ? OrderedJson(nullptr) : OrderedJson(opened.filter)},
                           {"wheels", opened.header.wheels},
                           {"ultrasonic", opened.header.ultrasonic},
-                          {"origin",
-                           {{"latitude_deg", opened.header.origin.latitude_deg},
-                            {"longitude_deg", opened.header.origin.longitude_deg},
-                            {"altitude_m", opened.header.origin.altitude_m}}},
+                          {"origin", formats::ndjson::OriginJson(opened.header.origin)},
                           {"reorder_window_s", opened.reorder_window_s},
                           {"period_s", opened.period_s},
                           {"journal", journal ? OrderedJson(*journal) : OrderedJson(nullptr)},

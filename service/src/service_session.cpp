@@ -106,7 +106,8 @@ ServiceSession::ServiceSession(SessionSpec spec, localization::LocalizationSessi
       session_(std::move(session)),
       reorder_(spec_.reorder_window_s),
       journal_(std::move(journal)),
-      max_time_jump_s_(max_time_jump_s) {}
+      max_time_jump_s_(max_time_jump_s),
+      frame_(spec_.header.origin) {}
 
 void ServiceSession::AttachJournal(std::unique_ptr<SessionJournal> journal) {
   std::lock_guard lock(mutex_);
@@ -294,8 +295,7 @@ nlohmann::ordered_json ServiceSession::StateLocked() const {
     j["x_m"] = x(L::kX);
     j["y_m"] = x(L::kY);
     j["phi_rad"] = x(L::kPhi);
-    const geometry::GeoOrigin geodetic =
-        mapio::LocalFrame(spec_.header.origin).ToGeodetic(Eigen::Vector3d(x(L::kX), x(L::kY), 0.0));
+    const geometry::GeoOrigin geodetic = frame_.ToGeodetic(Eigen::Vector3d(x(L::kX), x(L::kY), 0.0));
     j["latitude_deg"] = geodetic.latitude_deg;
     j["longitude_deg"] = geodetic.longitude_deg;
     const Eigen::Matrix3d p = ekf.covariance().topLeftCorner<3, 3>();

@@ -7,6 +7,7 @@
 #include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/localization/localization_session.hpp"
 #include "rowloc/localization/reorder_buffer.hpp"
+#include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/service/output_sink.hpp"
 #include "rowloc/service/session_journal.hpp"
 
@@ -114,6 +115,7 @@ class ServiceSession {
   localization::ReorderBuffer reorder_;
   std::unique_ptr<SessionJournal> journal_;
   double max_time_jump_s_;
+  mapio::LocalFrame frame_;  ///< the session's local frame, for the state's latitude and longitude
   std::vector<Subscriber> subscribers_;
   std::size_t accepted_ = 0;
   std::size_t estimate_subscribers_ = 0;
