@@ -664,7 +664,8 @@ Dispatcher::OrderedJson Dispatcher::Stats() const {
         {"p99", latency.Quantile(0.99)},
         {"max", latency.max_us()},
         {"count", latency.count()}}},
-      {"dropped_states", stats_.dropped_lines.load()}};
+      {"dropped_states", stats_.dropped_lines.load()},
+      {"queue_high_water_lines", stats_.queue_high_water_lines.load()}};
 }
 
 std::size_t Dispatcher::ResumeJournals(std::vector<std::string>& problems) {

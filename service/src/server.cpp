@@ -90,6 +90,7 @@ class Connection : public ConnectionBase, public std::enable_shared_from_this<Co
       }
       queue_.emplace_back(std::move(line), pushed);
       if (pushed) ++pushed_queued_;
+      dispatcher_.stats().RecordQueueLength(queue_.size());
       wake = writer_waiting_;
       writer_waiting_ = false;
     }

@@ -108,3 +108,11 @@ rowloc_command_test(scripts.ratio_scale_walk_rejects_empty_range OFF "empty seed
 rowloc_command_test(scripts.ratio_scale_walk_rejects_a_zero_duration OFF
   "--duration and --true-radius must be > 0, --speed-noise >= 0"
   ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --duration 0)
+
+# The statistical sweeps run the filter many times over whole scenarios: they measure the tools'
+# results, not new code paths (every path they take is also run once by the apps tests). Label
+# "sweep": the sanitizer pass skips them (CMakePresets.json, preset asan), where they would take
+# about 8 minutes of the CI's 45.
+set_property(TEST scripts.tune_noise_identifies_the_range_sigma_with_the_map scripts.validate_sim_sweeps_seeds
+             scripts.seed_sweep_with_the_row_map scripts.tune_noise_identifies_the_wheel_sigma
+             APPEND PROPERTY LABELS sweep)

@@ -127,14 +127,6 @@ def truth_at(t):
     return best
 
 
-def rss_mib(pid):
-    with open(f"/proc/{pid}/status") as f:
-        for line in f:
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024.0
-    return 0.0
-
-
 class Server:
     """A `rowloc serve` process on a free loopback port."""
 
@@ -1251,13 +1243,15 @@ class TestSlowClient(ServiceTestCase):
         slow.hello()
         self.open_main(feeder, "busy", initial_pose=INITIAL_POSE)
         slow.subscribe("busy", "state")
-        rss0 = rss_mib(s.proc.pid)
         stream_log(feeder, "busy", LOG["main"]["lines"])
         feeder.get_state("busy")
         stats = feeder.stats()
         self.assertGreater(stats["dropped_states"], 1000, stats)
-        rss1 = rss_mib(s.proc.pid)
-        self.assertLess(rss1, 500, (rss0, rss1))
+        # The slow connection's queue never held more than its bound (64 pushed lines plus the
+        # replies it has not read), although about 10000 lines were pushed to it. (Not the
+        # process's resident size: under AddressSanitizer that grows by hundreds of MiB from the
+        # allocator's quarantine alone, and 10000 state lines would be only ~10 MiB anyway.)
+        self.assertLessEqual(stats["queue_high_water_lines"], 2 * 64, stats)
         # The slow client is still connected, and a reply to a request is never dropped.
         reply_id = slow.new_id()
         slow.send_line(json.dumps({"type": "list_sessions", "id": reply_id}))

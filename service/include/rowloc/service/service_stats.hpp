@@ -35,11 +35,18 @@ struct ServiceStats {
   std::atomic<std::uint64_t> lines{0};
   std::atomic<std::uint64_t> sensor_messages{0};
   std::atomic<std::uint64_t> dropped_lines{0};
+  /// The longest outgoing queue any connection has held (lines): the slow-client bound at work.
+  std::atomic<std::uint64_t> queue_high_water_lines{0};
   std::atomic<std::uint64_t> connections{0};
   std::atomic<std::uint64_t> connections_total{0};
   std::array<std::atomic<std::uint64_t>, std::size(kAllErrorCodes)> rejects{};
   LatencyHistogram latency;
 
+  void RecordQueueLength(std::uint64_t lines) {
+    std::uint64_t seen = queue_high_water_lines.load(std::memory_order_relaxed);
+    while (lines > seen && !queue_high_water_lines.compare_exchange_weak(seen, lines, std::memory_order_relaxed)) {
+    }
+  }
   void CountReject(ErrorCode code) { rejects[static_cast<std::size_t>(code)].fetch_add(1, std::memory_order_relaxed); }
 };
 
