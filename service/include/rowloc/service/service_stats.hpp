@@ -42,9 +42,9 @@ struct ServiceStats {
   std::array<std::atomic<std::uint64_t>, std::size(kAllErrorCodes)> rejects{};
   LatencyHistogram latency;
 
-  void RecordQueueLength(std::uint64_t lines) {
+  void RecordQueueLength(std::uint64_t queue_lines) {
     std::uint64_t seen = queue_high_water_lines.load(std::memory_order_relaxed);
-    while (lines > seen && !queue_high_water_lines.compare_exchange_weak(seen, lines, std::memory_order_relaxed)) {
+    while (queue_lines > seen && !queue_high_water_lines.compare_exchange_weak(seen, queue_lines, std::memory_order_relaxed)) {
     }
   }
   void CountReject(ErrorCode code) { rejects[static_cast<std::size_t>(code)].fetch_add(1, std::memory_order_relaxed); }
