@@ -1,5 +1,6 @@
 #include "rowloc/localization/map_aided_ranging.hpp"
 
+#include "rowloc/geometry/collinear_vertices.hpp"
 #include "rowloc/geometry/cone_cast.hpp"
 #include "rowloc/geometry/ellipsoid.hpp"
 #include "rowloc/localization/range_slab.hpp"
@@ -39,6 +40,20 @@ geometry::RowMap InFilterFrame(const geometry::RowMap& map, const geometry::GeoO
     }
   }
   return local;
+}
+
+/// Vertices closer than this to the chord of their kept neighbours are dropped before indexing: a
+/// micrometre is far below any range's precision and above the rounding of coordinates in metres,
+/// so only straight runs of vertices go (a dense straight row costs what its one segment costs:
+/// docs/map-aided-update.md, "Dense rows"). Rows along a curve keep every vertex.
+constexpr double kCollinearToleranceM = 1e-6;
+
+geometry::RowMap WithoutCollinearVertices(geometry::RowMap map) {
+  for (geometry::Row& row : map.rows) {
+    std::vector<Eigen::Vector2d> kept = geometry::DropCollinearVertices(row.points_m, row.closed, kCollinearToleranceM);
+    if (kept.size() >= (row.closed ? 3U : 2U)) row.points_m = std::move(kept);
+  }
+  return map;
 }
 
 /// The sensor at a vehicle pose (X, Y, phi): its position p_s = p + R(phi) l, its beam axis
@@ -281,7 +296,7 @@ double CheckedSmoothing(double row_smoothing_m) {
 
 RowMapRanging::RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin,
                              double row_smoothing_m)
-    : RowMapRanging(InFilterFrame(map, filter_origin), CheckedSmoothing(row_smoothing_m)) {}
+    : RowMapRanging(WithoutCollinearVertices(InFilterFrame(map, filter_origin)), CheckedSmoothing(row_smoothing_m)) {}
 
 RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoothing_m)
     : index_(geometry::SegmentIndex::FromRowMap(local_map)),

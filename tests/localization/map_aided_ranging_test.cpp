@@ -259,6 +259,32 @@ TEST(MapAidedRanging, ReusedBuffersGiveTheSameCandidatesAsFreshOnes) {
   EXPECT_EQ(ranging.Candidates(away, kDown, kMaxRange, 0.5, buffers).size(), 0u);
 }
 
+TEST(MapAidedRanging, DenseStraightRowCostsWhatItsOneSegmentCosts) {
+  // 10^5 vertices along y = 0 (and a second row with a kink that must stay): indexed as the
+  // geometry they carry, and every query answers as the two-vertex row does.
+  std::vector<Eigen::Vector2d> dense;
+  constexpr int kVertices = 100000;
+  for (int i = 0; i < kVertices; ++i) dense.emplace_back(-10.0 + 20.0 * i / (kVertices - 1), 0.0);
+  const std::vector<Eigen::Vector2d> kinked = {{-10, -1.3}, {0, -1.3}, {0.5, -1.2}, {10, -1.2}};
+  const RowMapRanging dense_ranging = MakeRanging({MakeRow("h", dense), MakeRow("k", kinked)});
+  const RowMapRanging sparse_ranging = MakeRanging({MakeRow("h", {{-10, 0}, {10, 0}}), MakeRow("k", kinked)});
+  EXPECT_EQ(dense_ranging.index().entries().size(), 1u + 3u);
+  const RangeSensorMount forward{Eigen::Vector2d(0.75, 0.0), 0.0, kHalf};
+  for (double x = -9.0; x <= 9.0; x += 0.37) {
+    for (const double phi : {-kPi / 2, -kPi / 2 + 0.3, -kPi / 2 - 0.5}) {
+      const Eigen::Vector3d pose(x, 2.0, phi);
+      const auto dense_hits = dense_ranging.Candidates(pose, forward, kMaxRange, kWide);
+      const auto sparse_hits = sparse_ranging.Candidates(pose, forward, kMaxRange, kWide);
+      ASSERT_EQ(dense_hits.size(), sparse_hits.size()) << pose.transpose();
+      for (std::size_t i = 0; i < dense_hits.size(); ++i) {
+        EXPECT_EQ(RowOf(dense_ranging, dense_hits[i]), RowOf(sparse_ranging, sparse_hits[i]));
+        EXPECT_NEAR(dense_hits[i].predicted_range_m, sparse_hits[i].predicted_range_m, 1e-9) << pose.transpose();
+        EXPECT_LT((dense_hits[i].jacobian - sparse_hits[i].jacobian).norm(), 1e-9) << pose.transpose();
+      }
+    }
+  }
+}
+
 TEST(MapAidedRanging, BeamTiltedBeyondTheHalfAngleHitsWithTheConeEdge) {
   // Row y = 0, sensor at (0.75, 1): h = 1, dh/dphi = l_x = 0.75.
   const RowMapRanging ranging = HorizontalRow();

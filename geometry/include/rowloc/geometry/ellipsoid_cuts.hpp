@@ -55,6 +55,9 @@ struct CutParameters {
   double tau;
   double sigma;
   double delta;
+  /// 1 - sigma without cancellation (thin slabs: ~ (n - 1) h^2 for a centred slab of half-width h;
+  /// formula in docs/ellipsoid.md, "Thin slabs").
+  double one_minus_sigma;
 };
 CutParameters ParallelCutParameters(double alpha, double alpha_hat, Eigen::Index n);
 
@@ -64,6 +67,10 @@ struct CutResult {
   Ellipsoid<N> ellipsoid;  ///< the updated ellipsoid; the input one unchanged when status != kUpdated
   double alpha;            ///< depth of the upper cut as given (before the clamp to -1); NaN if n/a
   double alpha_hat;        ///< depth of the lower cut as given (before the clamp to -1); NaN if n/a
+  /// kUpdated only: the slab is so thin that double precision cannot hold the minimum-volume
+  /// ellipsoid; E+ was widened along the cut normal (by more than 0.1 % of its thin axis) so that it
+  /// still contains E ∩ cut. Always false for central and deep cuts.
+  bool precision_limited = false;
 };
 
 namespace detail {
@@ -77,6 +84,7 @@ struct CutFrame {
   double s;                         ///< sqrt(g'^T P g') > 0
   double g_dot_center;              ///< g'^T c
   double scale;                     ///< |g|_inf; g' = g / scale, offsets are divided by it too
+  double g_norm;                    ///< |g'|_2, in [1, sqrt(n)]
 };
 
 /// nullopt for a normal of the wrong size, non-finite or zero.
@@ -90,18 +98,46 @@ std::optional<CutFrame<N>> MakeCutFrame(const Ellipsoid<N>& e, const typename El
   const double s = std::sqrt(g_scaled.dot(p_g));
   if (!(s > 0.0) || !std::isfinite(s)) return std::nullopt;
   p_g /= s;
-  return CutFrame<N>{p_g, s, g_scaled.dot(e.center()), scale};
+  return CutFrame<N>{p_g, s, g_scaled.dot(e.center()), scale, g_scaled.norm()};
+}
+
+/// Relative rounding of a depth computed as (g'^T c - beta') / s: a depth this close to 1 is a
+/// plane tangent to E within rounding (kEmpty), not a cap of E of volume 1e-24.
+template <int N>
+double DepthRounding(const Ellipsoid<N>& e, const CutFrame<N>& frame, double beta_scaled) {
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  const double n = static_cast<double>(e.dimension());
+  return 16.0 * kEps * (1.0 + (n * frame.g_norm * e.center().norm() + std::abs(beta_scaled)) / frame.s);
+}
+
+/// 1 - sigma below which the shape update is formed as delta ((P - w w^T) + (1 - sigma) w w^T)
+/// with a rounding margin (docs/ellipsoid.md, "Thin slabs"); above it, delta (P - sigma w w^T).
+inline constexpr double kThinSlabOneMinusSigma = 1e-2;
+
+/// The rounding margin added to 1 - sigma for a thin slab: the absolute rounding of P - w w^T and
+/// of the Cholesky factor along g (~ n eps |P|_F |g|^2 / s^2), and of a point's coordinate along g
+/// (eps (|c| + sqrt|P|_F) |g| / s) against the thin axis sqrt(1 - sigma).
+template <int N>
+double ThinSlabMargin(const Ellipsoid<N>& e, const CutFrame<N>& frame, double one_minus_sigma) {
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  const double n = static_cast<double>(e.dimension());
+  const double p_norm = e.shape().norm();  // Frobenius
+  const double g_norm2 = frame.g_norm * frame.g_norm;
+  const double kappa = p_norm * g_norm2 / (frame.s * frame.s);
+  const double point_rounding = kEps * (e.center().norm() + std::sqrt(p_norm)) * std::sqrt(g_norm2) / frame.s;
+  return 16.0 * n * kEps * kappa + 8.0 * n * point_rounding * std::sqrt(one_minus_sigma) +
+         64.0 * point_rounding * point_rounding;
 }
 
 /// The common update for depths alpha (upper plane) and alpha_hat (lower plane); the reported
-/// depths are returned as given.
+/// depths are returned as given. depth_rounding: DepthRounding of the planes (0 for a central cut).
 template <int N>
 CutResult<N> ApplyCut(const Ellipsoid<N>& e, const CutFrame<N>& frame, double alpha, double alpha_hat,
-                      double reported_alpha, double reported_alpha_hat) {
+                      double reported_alpha, double reported_alpha_hat, double depth_rounding) {
   const auto keep = [&](CutStatus status) {
     return CutResult<N>{status, e, reported_alpha, reported_alpha_hat};
   };
-  if (alpha >= 1.0 || alpha_hat >= 1.0) return keep(CutStatus::kEmpty);
+  if (alpha >= 1.0 - depth_rounding || alpha_hat >= 1.0 - depth_rounding) return keep(CutStatus::kEmpty);
   const double a = std::max(alpha, -1.0);
   const double a_hat = std::max(alpha_hat, -1.0);
   if (a + a_hat > 0.0) return keep(CutStatus::kEmpty);
@@ -112,16 +148,28 @@ CutResult<N> ApplyCut(const Ellipsoid<N>& e, const CutFrame<N>& frame, double al
   using Vector = typename Ellipsoid<N>::Vector;
   using Matrix = typename Ellipsoid<N>::Matrix;
   const Vector center = e.center() - p.tau * frame.w;
+  const Matrix w_wt = frame.w * frame.w.transpose();
   // Divided by s^2 (w w^T = (P g)(P g)^T / s^2), not by s as in seed 002 eq. (3.12): SPEC §10.
-  const Matrix shape_unsymmetric = p.delta * (e.shape() - p.sigma * frame.w * frame.w.transpose());
+  Matrix shape_unsymmetric;
+  bool precision_limited = false;
+  if (e.dimension() > 1 && p.one_minus_sigma < kThinSlabOneMinusSigma) {
+    // Thin slab: P - sigma w w^T cancels to ~eps |P| along g, which is no longer small against the
+    // thin axis; (P - w w^T) + (1 - sigma) w w^T with the margin keeps E ∩ cut inside E+.
+    const double margin = ThinSlabMargin(e, frame, p.one_minus_sigma);
+    precision_limited = margin > 1e-3 * p.one_minus_sigma;
+    shape_unsymmetric = p.delta * ((e.shape() - w_wt) + (p.one_minus_sigma + margin) * w_wt);
+  } else {
+    shape_unsymmetric = p.delta * (e.shape() - p.sigma * w_wt);
+  }
   const Matrix shape = 0.5 * (shape_unsymmetric + shape_unsymmetric.transpose());
   Matrix cholesky;
   if (!center.allFinite() || !detail::CholeskyIfPositiveDefinite(shape, &cholesky)) {
-    return keep(CutStatus::kInvalidInput);  // only for slabs thin to rounding level
+    return keep(CutStatus::kInvalidInput);  // not expected: the margin keeps P+ positive definite
   }
-  return CutResult<N>{CutStatus::kUpdated,
-                      EllipsoidAccess::FromFactoredUnchecked<N>(center, shape, cholesky),
+  CutResult<N> result{CutStatus::kUpdated, EllipsoidAccess::FromFactoredUnchecked<N>(center, shape, cholesky),
                       reported_alpha, reported_alpha_hat};
+  result.precision_limited = precision_limited;
+  return result;
 }
 
 }  // namespace detail
@@ -133,7 +181,7 @@ CutResult<N> CentralCut(const Ellipsoid<N>& e, const typename Ellipsoid<N>::Vect
   if (!frame) {
     return CutResult<N>{CutStatus::kInvalidInput, e, detail::kNotApplicable, detail::kNotApplicable};
   }
-  return detail::ApplyCut(e, *frame, 0.0, -1.0, 0.0, detail::kNotApplicable);
+  return detail::ApplyCut(e, *frame, 0.0, -1.0, 0.0, detail::kNotApplicable, 0.0);
 }
 
 /// Minimum-volume ellipsoid of E ∩ { x : g^T x <= beta }.
@@ -144,7 +192,8 @@ CutResult<N> DeepCut(const Ellipsoid<N>& e, const typename Ellipsoid<N>::Vector&
     return CutResult<N>{CutStatus::kInvalidInput, e, detail::kNotApplicable, detail::kNotApplicable};
   }
   const double alpha = (frame->g_dot_center - beta / frame->scale) / frame->s;
-  return detail::ApplyCut(e, *frame, alpha, -1.0, alpha, detail::kNotApplicable);
+  return detail::ApplyCut(e, *frame, alpha, -1.0, alpha, detail::kNotApplicable,
+                          detail::DepthRounding(e, *frame, beta / frame->scale));
 }
 
 /// Minimum-volume ellipsoid of E ∩ { x : beta_lo <= g^T x <= beta_hi } (a slab).
@@ -161,7 +210,9 @@ CutResult<N> ParallelCut(const Ellipsoid<N>& e, const typename Ellipsoid<N>::Vec
   if (beta_lo == beta_hi && alpha < 1.0 && alpha_hat < 1.0) {
     return CutResult<N>{CutStatus::kInvalidInput, e, alpha, alpha_hat};  // zero width
   }
-  return detail::ApplyCut(e, *frame, alpha, alpha_hat, alpha, alpha_hat);
+  const double depth_rounding = detail::DepthRounding(
+      e, *frame, std::max(std::abs(beta_lo), std::abs(beta_hi)) / frame->scale);
+  return detail::ApplyCut(e, *frame, alpha, alpha_hat, alpha, alpha_hat, depth_rounding);
 }
 
 }  // namespace rowloc::geometry
