@@ -2,6 +2,7 @@
 // truth (docs/protocol.md §2-3) and writes report.txt, report.json and plots/ (docs/validation.md).
 // Errors (unreadable or malformed input, an estimate outside the truth's span) exit with status 2.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 #include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/geometry/segment_index.hpp"
@@ -11,7 +12,6 @@
 #include "rowloc/sim/report_plots.hpp"
 
 #include <fmt/format.h>
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <exception>
@@ -81,7 +81,9 @@ void DropSettling(formats::EstimateStream& estimates, double settle_s) {
 }
 
 void RunEvaluate(const EvaluateOptions& o) {
-  if (o.json) spdlog::set_default_logger(spdlog::stderr_color_mt("rowloc-evaluate"));  // stdout is for JSON
+  const std::filesystem::path dir(o.output_dir);
+  CheckCommandFiles({{"truth", o.truth_path}, {"estimates", o.estimates_path}, {"--map", o.map_path}},
+                    {{"--output", (dir / "report.txt").string()}, {"--output", (dir / "report.json").string()}});
   const formats::TruthStream truth = formats::ReadTruthStream(o.truth_path, ProgressFor(o.truth_path));
   spdlog::info("{}: {} truth samples", o.truth_path, truth.samples.size());
   formats::EstimateStream estimates = formats::ReadEstimateStream(o.estimates_path, ProgressFor(o.estimates_path));
@@ -119,18 +121,18 @@ void RegisterEvaluateCommand(CLI::App& app) {
   cmd->add_option("estimates", o->estimates_path, "Estimate stream (NDJSON, docs/protocol.md §3)")->required();
   cmd->add_option("-o,--output", o->output_dir, "Report directory (report.txt, report.json, plots/)")->required();
   cmd->add_option("--map", o->map_path, "Row map (GeoJSON): along/across relative to the rows, rows in the plot");
-  cmd->add_option("--max-lag", o->max_lag, "Whiteness: autocorrelation lags 1..N")->check(CLI::PositiveNumber);
+  cmd->add_option("--max-lag", o->max_lag, "Whiteness: autocorrelation lags 1..N")->check(PositiveNumber());
   cmd->add_option("--drift-min-duration", o->drift_min_duration_s, "Shortest GNSS outage reported as drift [s]")
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_option("--ellipse-interval", o->plot.ellipse_interval_s, "Seconds between plotted ellipses")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--k-sigma", o->plot.k_sigma, "Ellipse and envelope scale k (P = k^2 S)")->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
+  cmd->add_option("--k-sigma", o->plot.k_sigma, "Ellipse and envelope scale k (P = k^2 S)")->check(PositiveNumber());
   cmd->add_flag("--no-plots", o->no_plots, "Do not write or draw plots");
   cmd->add_option("--settle", o->settle_s, "Leave out the first S seconds after the first estimate (convergence)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_flag("--clip-to-truth", o->clip_to_truth,
                 "Drop (and count) estimates outside the truth's time span instead of failing");
-  cmd->add_flag("--json", o->json, "Print the JSON summary to stdout (logs go to stderr)");
+  cmd->add_flag("--json", o->json, "Print the JSON summary to stdout instead of the text report");
   cmd->callback([o] { RunReportingInputErrors("evaluate", [&o] { RunEvaluate(*o); }); });
 }
 

@@ -10,6 +10,7 @@
 // Heading is taken as known here; the filter (issue 5) accounts for its uncertainty. --plot DIR
 // draws the rows, the truth, the slabs and the ellipse before and after each cut (example_plot.hpp).
 #include "commands.hpp"
+#include "option_checks.hpp"
 #include "ellipse_report.hpp"
 #include "example_plot.hpp"
 
@@ -25,6 +26,7 @@
 
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -117,6 +119,14 @@ void PrintSlabAndCut(const Sensor& sensor, double range_m, const localization::R
 }
 
 int RunExample(const ExampleOptions& o) {
+  if (!o.plot_dir.empty()) {
+    const std::filesystem::path dir(o.plot_dir);
+    std::vector<NamedPath> outputs;
+    for (const char* name : {"rows.dat", "ellipses.dat", "slabs.dat", "points.dat", "cuts.gp", "cuts.svg"}) {
+      outputs.push_back({"--plot", (dir / name).string()});
+    }
+    CheckCommandFiles({{"--map", o.map_path}}, outputs);
+  }
   const geometry::RowMap map = mapio::ReadRowMapGeoJson(o.map_path);
   const geometry::SegmentIndex index = geometry::SegmentIndex::FromRowMap(map);
   const Pose2 truth = TruePose(map, index, o);
@@ -182,15 +192,16 @@ void RegisterExampleCommand(CLI::App& app) {
   cmd->add_option("--error-across", options->error_across_m, "Prediction error across the rows [m]");
   cmd->add_option("--error-along", options->error_along_m, "Prediction error along the rows [m]");
   cmd->add_option("--sigma", options->sigma_m, "Predicted position standard deviation [m]")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--k-sigma", options->k_sigma, "Ellipse scale k (P = k^2 S)")->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
+  cmd->add_option("--k-sigma", options->k_sigma, "Ellipse scale k (P = k^2 S)")->check(PositiveNumber());
   cmd->add_option("--range-sigma", options->range_sigma_m, "Ultrasonic range standard deviation [m]")
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   cmd->add_option("--plot", options->plot_dir,
                   "Directory for the picture: rows, truth, slabs, ellipse before and after each cut (cuts.svg)");
   cmd->callback([options] {
-    const int code = RunExample(*options);
-    if (code != 0) throw CLI::RuntimeError(code);
+    int code = 0;
+    RunReportingInputErrors("example", [&] { code = RunExample(*options); });
+    if (code != 0) throw CLI::RuntimeError(code);  // the truth outside the updated ellipse: a result
   });
 }
 

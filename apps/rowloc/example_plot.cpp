@@ -1,25 +1,42 @@
 #include "example_plot.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/sim/report_plots.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
+#include <exception>
+#include <sstream>
+#include <utility>
 #include <numbers>
 #include <stdexcept>
 
 namespace rowloc::apps {
 namespace {
 
-std::ofstream OpenFile(const std::filesystem::path& path) {
-  std::ofstream out(path, std::ios::trunc);
-  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  return out;
-}
+/// A plot file: its text is collected, then written checked and atomically (mapio::OutputFile).
+class PlotFile {
+ public:
+  explicit PlotFile(std::filesystem::path path) : path_(std::move(path)) {}
+  ~PlotFile() noexcept(false) {
+    if (std::uncaught_exceptions() == 0) mapio::WriteFileAtomically(path_, text_.str());
+  }
+  PlotFile(const PlotFile&) = delete;
+  PlotFile& operator=(const PlotFile&) = delete;
+  template <typename T>
+  PlotFile& operator<<(const T& value) {
+    text_ << value;
+    return *this;
+  }
+
+ private:
+  std::filesystem::path path_;
+  std::ostringstream text_;
+};
 
 /// The boundary of E(c, P) as a closed polyline: c + L (cos t, sin t), P = L L^T.
-void WriteEllipse(std::ofstream& out, const geometry::Ellipsoid<2>& e) {
+void WriteEllipse(PlotFile& out, const geometry::Ellipsoid<2>& e) {
   constexpr int kPoints = 96;
   for (int i = 0; i <= kPoints; ++i) {
     const double t = 2.0 * std::numbers::pi * i / kPoints;
@@ -30,7 +47,7 @@ void WriteEllipse(std::ofstream& out, const geometry::Ellipsoid<2>& e) {
 }
 
 /// A bound n^T p = beta as a 12 m segment centred on the point of the line nearest to `near`.
-void WriteLine(std::ofstream& out, const Eigen::Vector2d& n, double beta, const Eigen::Vector2d& near) {
+void WriteLine(PlotFile& out, const Eigen::Vector2d& n, double beta, const Eigen::Vector2d& near) {
   const Eigen::Vector2d foot = near + (beta - n.dot(near)) * n;
   const Eigen::Vector2d t(-n.y(), n.x());
   for (const double s : {-6.0, 6.0}) {
@@ -47,7 +64,7 @@ std::string WriteExamplePlot(const std::filesystem::path& directory, const geome
                              const std::vector<ExampleCutStep>& steps) {
   std::filesystem::create_directories(directory);
   {
-    std::ofstream rows = OpenFile(directory / "rows.dat");
+    PlotFile rows(directory / "rows.dat");
     for (const geometry::Row& row : map.rows) {
       for (const Eigen::Vector2d& p : row.points_m) rows << fmt::format("{:.6f} {:.6f}\n", p.x(), p.y());
       if (row.closed) rows << fmt::format("{:.6f} {:.6f}\n", row.points_m.front().x(), row.points_m.front().y());
@@ -56,9 +73,9 @@ std::string WriteExamplePlot(const std::filesystem::path& directory, const geome
   }
   std::string titles = "predicted";
   {
-    std::ofstream ellipses = OpenFile(directory / "ellipses.dat");
+    PlotFile ellipses(directory / "ellipses.dat");
     WriteEllipse(ellipses, predicted);
-    std::ofstream slabs = OpenFile(directory / "slabs.dat");
+    PlotFile slabs(directory / "slabs.dat");
     for (const ExampleCutStep& step : steps) {
       WriteEllipse(ellipses, step.after);
       WriteLine(slabs, step.slab.normal, step.slab.lower_m, truth_m);
@@ -67,13 +84,13 @@ std::string WriteExamplePlot(const std::filesystem::path& directory, const geome
     }
   }
   {
-    std::ofstream points = OpenFile(directory / "points.dat");
+    PlotFile points(directory / "points.dat");
     points << fmt::format("{:.6f} {:.6f} truth\n", truth_m.x(), truth_m.y());
     const Eigen::Vector2d c = steps.empty() ? predicted.center() : steps.back().after.center();
     points << fmt::format("{:.6f} {:.6f} estimate\n", c.x(), c.y());
   }
   {
-    std::ofstream gp = OpenFile(directory / "cuts.gp");
+    PlotFile gp(directory / "cuts.gp");
     gp << "set terminal svg size 960,720 dynamic enhanced font 'sans,11'\nset output 'cuts.svg'\n"
        << "set title 'Worked example: predicted ellipse, slabs of the four rangers, ellipse after each cut'\n"
        << "set size ratio -1\nset xlabel 'East [m]'\nset ylabel 'North [m]'\nset key outside right\n"

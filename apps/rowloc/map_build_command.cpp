@@ -1,7 +1,9 @@
 // `rowloc map build` (issue 27: survey point cloud -> georeferenced row map, docs/mapping.md) and
 // `rowloc map compare` (a built map against the true one: distances, rows found, missed, invented).
 #include "commands.hpp"
+#include "option_checks.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapping/map_build_config.hpp"
 #include "rowloc/mapping/map_builder.hpp"
@@ -10,7 +12,6 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
-#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -45,6 +46,13 @@ void RunBuild(const BuildOptions& o) {
     request.config_source = o.config_path;
   }
   if (o.octomap_resolution_m > 0.0) request.octomap_resolution_m = o.octomap_resolution_m;
+  // Before the survey is read: no output may name an input, or replace a device or directory.
+  const std::filesystem::path dir(o.output_dir);
+  std::vector<NamedPath> outputs;
+  for (const char* name : {"row-map.geojson", "dtm.json", "map.svg", "report.txt", "report.json", "canopy.bt"}) {
+    outputs.push_back({"--output", (dir / name).string()});
+  }
+  CheckCommandFiles({{"survey", o.survey_path}, {"--config", o.config_path}}, outputs);
   const mapping::MapBuildResult result = mapping::RunMapBuild(request);
   for (const auto& stage : result.stages) {
     spdlog::info("{:<44} {:>8} {:<12} {:.3f} s", stage.name, stage.points, stage.unit.substr(0, 12), stage.seconds);
@@ -70,14 +78,13 @@ struct CompareOptions {
 };
 
 mapping::MapComparison RunCompare(const CompareOptions& o) {
+  CheckCommandFiles({{"built", o.built_path}, {"truth", o.truth_path}}, {{"--json", o.json_path}});
   const geometry::RowMap built = mapio::ReadRowMapGeoJson(o.built_path);
   const geometry::RowMap truth = mapio::ReadRowMapGeoJson(o.truth_path);
   const mapping::MapComparison c = mapping::CompareRowMaps(built, truth, o.params);
   fmt::print("{} against {}\n{}", o.built_path, o.truth_path, mapping::FormatMapComparison(c));
   if (!o.json_path.empty()) {
-    std::ofstream out(o.json_path, std::ios::trunc);
-    out << mapping::FormatMapComparisonJson(c);
-    if (!out) throw std::runtime_error("cannot write " + o.json_path);
+    mapio::WriteFileAtomically(o.json_path, mapping::FormatMapComparisonJson(c));
   }
   return c;
 }
@@ -112,20 +119,20 @@ void RegisterMapBuildCommands(CLI::App& app) {
   b->add_option("--config", build->config_path, "Parameters (JSON; default: the values of config/mapping/default.json)");
   b->add_option("--octomap", build->octomap_resolution_m,
                 "Also write canopy.bt, an OctoMap of the canopy points in the map frame, voxels of this size [m]")
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   b->callback([build] { RunReportingInputErrors("map build", [&build] { RunBuild(*build); }); });
 
   auto compare = std::make_shared<CompareOptions>();
   CLI::App* c = map->add_subcommand("compare", "Compare a built row map with the true one (distances, rows found)");
   c->add_option("built", compare->built_path, "Built row map (GeoJSON)")->required();
   c->add_option("truth", compare->truth_path, "True row map (GeoJSON)")->required();
-  c->add_option("--step", compare->params.sample_step_m, "Sampling step along the outlines [m]")->check(CLI::PositiveNumber);
+  c->add_option("--step", compare->params.sample_step_m, "Sampling step along the outlines [m]")->check(PositiveNumber());
   c->add_option("--match-distance", compare->params.match_distance_m, "Largest median distance of a matched part [m]")
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   c->add_option("--json", compare->json_path, "Also write the comparison as JSON");
   c->add_option("--require-p95", compare->require_p95_m,
                 "Exit 1 unless p95 <= this [m], every true part is found and none is invented")
-      ->check(CLI::PositiveNumber);
+      ->check(PositiveNumber());
   c->callback([compare] {
     mapping::MapComparison result;
     RunReportingInputErrors("map compare", [&compare, &result] { result = RunCompare(*compare); });

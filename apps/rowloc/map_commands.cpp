@@ -25,12 +25,14 @@ struct SampleOptions {
 };
 
 void RunSample(const SampleOptions& o) {
+  CheckCommandFiles({}, {{"--output", o.output_path}});
   const geometry::RowMap map = geometry::MakeSampleRowMap(o.params);
   mapio::WriteRowMapGeoJson(map, o.output_path);
   spdlog::info("wrote {} rows ({} segments) to {}", map.rows.size(), map.SegmentCount(), o.output_path);
 }
 
 void RunInfo(const std::string& path) {
+  CheckCommandFiles({{"file", path}}, {});
   const geometry::RowMap map = mapio::ReadRowMapGeoJson(path);
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector2d hi = -lo;
@@ -65,6 +67,7 @@ struct EditOptions {
 };
 
 void RunEdit(const EditOptions& o) {
+  CheckCommandFiles({{"file", o.input_path}}, {{"--output", o.output_path}});
   geometry::RowMap map = mapio::ReadRowMapGeoJson(o.input_path);
   for (const std::string& id : o.drop_rows) {
     const auto it = std::find_if(map.rows.begin(), map.rows.end(), [&](const geometry::Row& r) { return r.id == id; });
@@ -102,12 +105,12 @@ void RegisterMapCommands(CLI::App& app) {
   gen->add_option("--lat", sample->params.origin.latitude_deg, "Origin latitude [deg]");
   gen->add_option("--lon", sample->params.origin.longitude_deg, "Origin longitude [deg]");
   gen->add_option("--alt", sample->params.origin.altitude_m, "Origin height above WGS84 [m]");
-  gen->callback([sample] { RunSample(*sample); });
+  gen->callback([sample] { RunReportingInputErrors("map sample", [&sample] { RunSample(*sample); }); });
 
   auto info_path = std::make_shared<std::string>();
   CLI::App* info = map->add_subcommand("info", "Read, validate and describe a row map");
   info->add_option("file", *info_path, "GeoJSON row map")->required();
-  info->callback([info_path] { RunInfo(*info_path); });
+  info->callback([info_path] { RunReportingInputErrors("map info", [&info_path] { RunInfo(*info_path); }); });
 
   auto edit = std::make_shared<EditOptions>();
   CLI::App* ed = map->add_subcommand("edit", "Write a shifted row map, or one with rows removed (map errors)");

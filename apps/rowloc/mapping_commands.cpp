@@ -1,6 +1,7 @@
 // `rowloc cloud info` and `rowloc cloud octomap`: the first steps of the survey pipeline
 // (SPEC §5) on a PLY or PCD point cloud.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
 #include "rowloc/mapping/point_cloud.hpp"
@@ -22,6 +23,7 @@ struct OctoMapCommandOptions {
 };
 
 void RunCloudInfo(const std::string& path) {
+  CheckCommandFiles({{"file", path}}, {});
   const mapping::PointCloud cloud = mapping::ReadPointCloud(path);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
@@ -34,6 +36,7 @@ void RunCloudInfo(const std::string& path) {
 }
 
 void RunOctoMap(const OctoMapCommandOptions& o) {
+  CheckCommandFiles({{"input", o.input_path}}, {{"output", o.output_path}});
   const mapping::PointCloud cloud = mapping::ReadPointCloud(o.input_path);
   const mapping::OctoMapSummary summary =
       mapping::WriteOctoMap(cloud, mapping::OctoMapOptions{o.resolution_m}, o.output_path);
@@ -50,14 +53,15 @@ void RegisterMappingCommands(CLI::App& app) {
   auto info_path = std::make_shared<std::string>();
   CLI::App* info = cloud->add_subcommand("info", "Read a point cloud and print its size and extent");
   info->add_option("file", *info_path, "Point cloud (.ply or .pcd)")->required();
-  info->callback([info_path] { RunCloudInfo(*info_path); });
+  info->callback([info_path] { RunReportingInputErrors("cloud info", [&info_path] { RunCloudInfo(*info_path); }); });
 
   auto opts = std::make_shared<OctoMapCommandOptions>();
   CLI::App* octo = cloud->add_subcommand("octomap", "Write an OctoMap (.bt) of a point cloud");
   octo->add_option("input", opts->input_path, "Point cloud (.ply or .pcd)")->required();
   octo->add_option("output", opts->output_path, "OctoMap file (.bt)")->required();
-  octo->add_option("--resolution", opts->resolution_m, "Voxel size [m]")->check(CLI::PositiveNumber);
-  octo->callback([opts] { RunOctoMap(*opts); });
+  octo->add_option("--resolution", opts->resolution_m, "Voxel size [m]")
+      ->check(FiniteInRange(mapping::kMinResolutionM, mapping::kMaxResolutionM, "RANGE"));
+  octo->callback([opts] { RunReportingInputErrors("cloud octomap", [&opts] { RunOctoMap(*opts); }); });
 }
 
 }  // namespace rowloc::apps

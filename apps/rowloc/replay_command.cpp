@@ -21,7 +21,10 @@
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
+// Outputs are written to temporaries and renamed over their targets only when the replay succeeded;
+// an output naming an input (also through links) or another output is refused before anything opens.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 #include "rowloc/formats/estimate_stream_writer.hpp"
 #include "rowloc/formats/sensor_log_reader.hpp"
@@ -29,6 +32,7 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/localization_session.hpp"
 #include "rowloc/localization/reorder_buffer.hpp"
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
@@ -37,6 +41,8 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -98,10 +104,10 @@ nlohmann::ordered_json EchoLine(double time_s, const localization::EchoTrace& e)
 }
 
 void LogSummary(const localization::LocalizationSession& session, const formats::SensorLogReader& reader,
-                const ReplayOptions& o) {
+                std::size_t refused_lines, const ReplayOptions& o) {
   const localization::VehicleEkf& ekf = session.filter();
   spdlog::info("{} messages, {} estimates, {} rejected inputs", reader.messages_read(), session.estimates(),
-               session.refused());
+               session.refused() + refused_lines);
   if (session.ultrasonic_pings() > 0 && !ekf.has_row_map()) {
     spdlog::info("{} ultrasonic pings read but not used (no row map: --map)", session.ultrasonic_pings());
   }
@@ -129,24 +135,23 @@ void LogSummary(const localization::LocalizationSession& session, const formats:
   }
 }
 
-/// The output files of a replay, opened (and checked) before the run starts.
+/// The output files of a replay, checked and created (as temporaries) before the run starts, and
+/// renamed over their targets only when the whole replay succeeded (mapio::OutputFile).
 struct ReplayOutputs {
-  std::ofstream estimates, echoes, smoothed;
+  std::unique_ptr<mapio::OutputFile> estimates, echoes, smoothed;
   std::size_t echo_lines = 0;
 };
 
-std::ofstream OpenForWriting(const std::string& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  return out;
-}
-
 void RunReplay(const ReplayOptions& o) {
+  // Before anything is opened: no output may name an input (or another output), or a device.
+  CheckCommandFiles({{"log", o.log_path}, {"--vehicle", o.vehicle_path}, {"--filter", o.filter_path},
+                     {"--map", o.map_path}, {"--calibration", o.calibration_path}},
+                    {{"--output", o.output_path}, {"--echo-log", o.echo_log_path}, {"--smoothed", o.smoothed_path}});
   const mapio::VehicleConfig vehicle = mapio::LoadVehicleConfig(o.vehicle_path);
   const localization::FilterConfig config =
       o.filter_path.empty() ? localization::FilterConfig{} : localization::LoadFilterConfig(o.filter_path);
   std::ifstream log(o.log_path, std::ios::binary);
-  if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log");
+  if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log: " + std::strerror(errno));
   formats::SensorLogReader reader(log, o.log_path);
   localization::LocalizationSession session(
       vehicle, config, reader.header(),
@@ -166,22 +171,21 @@ void RunReplay(const ReplayOptions& o) {
     }
   }
   ReplayOutputs out;
-  out.estimates = OpenForWriting(o.output_path);
+  out.estimates = std::make_unique<mapio::OutputFile>(o.output_path);
   if (!o.echo_log_path.empty()) {
     if (!session.filter().has_row_map()) {
       throw std::runtime_error("--echo-log needs --map (echoes are used only against a row map)");
     }
-    out.echoes = OpenForWriting(o.echo_log_path);
-    out.echoes << nlohmann::ordered_json{{"type", "echo_header"}, {"source", "rowloc replay"},
+    out.echoes = std::make_unique<mapio::OutputFile>(o.echo_log_path);
+    out.echoes->stream() << nlohmann::ordered_json{{"type", "echo_header"}, {"source", "rowloc replay"},
                                          {"vehicle", vehicle.name},
                                          {"method", localization::MapAidedMethodName(config.map_aided.method)}}.dump()
                << '\n';
   }
-  formats::EstimateLogWriter writer(out.estimates, localization::kEstimateStreamSource, vehicle.name,
+  formats::EstimateLogWriter writer(out.estimates->stream(), localization::kEstimateStreamSource, vehicle.name,
                                     reader.header().origin);
   if (!o.smoothed_path.empty()) {
-    if (o.smoothed_path == o.output_path) throw std::runtime_error("--smoothed: the same file as --output");
-    out.smoothed = OpenForWriting(o.smoothed_path);
+    out.smoothed = std::make_unique<mapio::OutputFile>(o.smoothed_path);
     session.EnableSmoothing();
   }
   spdlog::info("replay {} with vehicle {} and filter {}", o.log_path, vehicle.name, config.name);
@@ -197,38 +201,52 @@ void RunReplay(const ReplayOptions& o) {
     if (step.error) spdlog::warn("{}:{}: rejected: {}", o.log_path, reader.line_number(), *step.error);
     if (step.notice) spdlog::info("{}:{}: {}", o.log_path, reader.line_number(), *step.notice);
     for (const formats::UpdateLogRecord& update : step.updates) writer.WriteUpdate(update);
-    if (step.echo && out.echoes.is_open()) {
-      out.echoes << EchoLine(session.filter().time_s(), *step.echo).dump() << '\n';
+    if (step.echo && out.echoes) {
+      out.echoes->stream() << EchoLine(session.filter().time_s(), *step.echo).dump() << '\n';
       ++out.echo_lines;
     }
     if (step.estimate) writer.Write(*step.estimate);
   };
-  while (auto message = reader.Next()) {
+  // A line the reader refuses (malformed, a value outside its domain, time going backwards) is
+  // rejected with its line and key, as the service refuses such a message, and the replay goes on.
+  std::size_t refused_lines = 0;
+  const auto next = [&]() -> std::optional<formats::SensorMessage> {
+    for (;;) {
+      try {
+        return reader.Next();
+      } catch (const formats::SensorLogError& e) {
+        if (!reader.readable()) throw;
+        spdlog::warn("{}:{}: rejected: {}: {}", o.log_path, e.line(), e.subject(), e.reason());
+        ++refused_lines;
+      }
+    }
+  };
+  while (auto message = next()) {
     if (reorder.Add(std::move(*message)) == localization::ReorderBuffer::Admission::kTooOld) {
       spdlog::warn("{}:{}: rejected: older than the journal's reorder window", o.log_path, reader.line_number());
+      ++refused_lines;
       continue;
     }
     while (auto ready = reorder.PopReady()) process(*ready);
   }
   while (auto held = reorder.PopAny()) process(*held);
 
-  LogSummary(session, reader, o);
-  if (out.echoes.is_open()) {
-    out.echoes.flush();
-    if (!out.echoes) throw std::runtime_error(o.echo_log_path + ": write failed");
-    spdlog::info("wrote echo log {}: {} echoes", o.echo_log_path, out.echo_lines);
-  }
-  spdlog::info("wrote {}", o.output_path);
-  if (out.smoothed.is_open()) {
+  LogSummary(session, reader, refused_lines, o);
+  if (out.smoothed) {
     const std::size_t nodes = session.filter().smoother()->nodes();
-    formats::EstimateLogWriter smoothed_writer(out.smoothed, "rowloc replay --smoothed", vehicle.name,
+    formats::EstimateLogWriter smoothed_writer(out.smoothed->stream(), "rowloc replay --smoothed", vehicle.name,
                                                reader.header().origin);
     const std::vector<formats::EstimateRecord> smoothed = session.FinishSmoothing();
     for (const formats::EstimateRecord& record : smoothed) smoothed_writer.Write(record);
-    out.smoothed.flush();
-    if (!out.smoothed) throw std::runtime_error(o.smoothed_path + ": write failed");
+    out.smoothed->Commit();
     spdlog::info("wrote {}: {} smoothed estimates over {} filter nodes", o.smoothed_path, smoothed.size(), nodes);
   }
+  if (out.echoes) {
+    out.echoes->Commit();
+    spdlog::info("wrote echo log {}: {} echoes", o.echo_log_path, out.echo_lines);
+  }
+  out.estimates->Commit();
+  spdlog::info("wrote {}", o.output_path);
 }
 
 }  // namespace
@@ -249,7 +267,7 @@ void RegisterReplayCommand(CLI::App& app) {
                   "(sigmas widened by the filter file's carried_*_change_sigma*)");
   cmd->add_option("--smoothed", o->smoothed_path,
                   "Also write the fixed-interval (RTS) smoothed estimates, same times and format (post-run)");
-  cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
+  cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(PositiveNumber());
   cmd->add_flag("--no-updates", o->no_updates, "Do not write update lines (NIS)");
   cmd->add_option("--skip", o->skip_types, "Message types not given to the filter (e.g. imu: odometry-only runs)")
       ->check(CLI::IsMember({"gps", "imu", "wheels", "steering", "ultrasonic", "vio"}));

@@ -6,13 +6,17 @@
 // multiple of real time such as `x10`. Exit 2 for bad input or a refused session, 1 when the
 // service went away.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/service/client.hpp"
 
 #include <nlohmann/json.hpp>
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -56,14 +60,15 @@ void AddConfig(nlohmann::json& request, const std::string& value, const char* na
   if (std::filesystem::is_regular_file(value)) {
     std::ifstream in(value, std::ios::binary);
     const nlohmann::json config = nlohmann::json::parse(in, nullptr, false);
-    if (!config.is_object()) throw std::invalid_argument(value + ": not a JSON object");
+    if (config.is_discarded()) throw std::invalid_argument(value + ": not valid JSON");
+    if (!config.is_object()) throw std::invalid_argument(value + ": valid JSON, but not an object");
     request[inline_key] = config;
   } else {
     request[name_key] = value;
   }
 }
 
-void DrainPushed(service::Client& client, const std::string& session, std::ofstream& out, std::size_t& lines) {
+void DrainPushed(service::Client& client, const std::string& session, std::ostream& out, std::size_t& lines) {
   while (const std::optional<std::string> line = client.ReadPushed(std::chrono::milliseconds(0))) {
     if (line->starts_with(R"({"type":"shutdown")")) {  // not an estimate line: the server is stopping
       const nlohmann::json notice = nlohmann::json::parse(*line, nullptr, false);
@@ -80,9 +85,14 @@ void DrainPushed(service::Client& client, const std::string& session, std::ofstr
 }
 
 void RunSend(const SendOptions& o) {
+  const auto file_or_name = [](const std::string& value) {
+    return std::filesystem::is_regular_file(value) ? value : std::string();
+  };
+  CheckCommandFiles({{"log", o.log_path}, {"--vehicle", file_or_name(o.vehicle)}, {"--filter", file_or_name(o.filter)}},
+                    {{"--output", o.output_path}});
   const double wall_per_log_s = WallPerLogSecond(o.rate);
   std::ifstream log(o.log_path, std::ios::binary);
-  if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log");
+  if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log: " + std::strerror(errno));
   std::string header_line;
   if (!std::getline(log, header_line)) throw std::runtime_error(o.log_path + ": empty sensor log");
   const nlohmann::json header = nlohmann::json::parse(header_line, nullptr, false);
@@ -95,8 +105,8 @@ void RunSend(const SendOptions& o) {
   if (!o.map.empty()) open["map"] = o.map;
   if (!o.session.empty()) open["session"] = o.session;
   // Before the session is opened: a bad output path must not leave a session open on the server.
-  std::ofstream out(o.output_path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(o.output_path + ": cannot open for writing");
+  mapio::OutputFile output(o.output_path);  // renamed over the target when the whole stream is in
+  std::ostream& out = output.stream();
   service::Client client = service::Client::Connect(o.to);
   client.Hello();
   const std::string session = client.OpenSession(open);
@@ -139,8 +149,7 @@ void RunSend(const SendOptions& o) {
   } catch (const std::runtime_error& e) {  // the connection: a failed write, a closed connection, no reply
     throw ServiceGone("the service went away after " + std::to_string(sent) + " messages: " + e.what());
   }
-  out.flush();
-  if (!out) throw std::runtime_error(o.output_path + ": write failed");
+  output.Commit();
   spdlog::info("sent {} messages ({} accepted) in {:.2f} s; wrote {} lines to {}", sent,
                closed.value("messages", 0), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                written, o.output_path);
@@ -158,7 +167,7 @@ void RegisterSendCommand(CLI::App& app) {
   cmd->add_option("--filter", o->filter, "Filter name on the server, or a filter file (sent inline)");
   cmd->add_option("--session", o->session, "Session name (default: the server's)");
   cmd->add_option("--rate", o->rate, "max (default), realtime, or xN: N times real time");
-  cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(CLI::PositiveNumber);
+  cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(PositiveNumber());
   cmd->add_option("-o,--output", o->output_path, "Estimate stream to write (docs/protocol.md §3)")->required();
   cmd->callback([o] {
     std::optional<std::string> gone;

@@ -1,7 +1,9 @@
 // `rowloc serve [--config FILE] [--listen ADDR] [--port N] [--unix-socket PATH] [--token-file FILE]
-//  [--vehicles DIR] [--maps DIR] [--filters DIR] [--journal-dir DIR] [--fsync POLICY] [--threads N]`:
-// the localization service (docs/service.md). Settings come from the JSON file, then the options.
-// The first line on stdout says where it listens ({"type":"listening","tcp":"HOST:PORT","unix":...}),
+//  [--vehicles DIR] [--maps DIR] [--filters DIR] [--journal-dir DIR] [--fsync POLICY] [--threads N]
+//  [--http-port N]`: the localization service (docs/service.md), with --http-port its live view in a
+// browser (docs/live-view.md). Settings come from the JSON file, then the options.
+// The first line on stdout says where it listens ({"type":"listening","tcp":"HOST:PORT","unix":...,
+// "http":URL or null}),
 // so that a script can start it with --port 0 and read the port; logs go to stderr. Sessions left
 // open in the journal directory are resumed before the first connection is accepted. SIGINT and
 // SIGTERM stop it gracefully (clients told, journals synced); exit 0 then, 2 for bad settings.
@@ -24,7 +26,7 @@ namespace {
 struct ServeOptions {
   std::string config_path;
   std::optional<std::string> listen, unix_socket, token_file, vehicles, maps, filters, journal_dir, fsync;
-  std::optional<int> port, threads;
+  std::optional<int> port, threads, http_port;
 };
 
 service::ServiceSettings SettingsOf(const ServeOptions& o) {
@@ -32,6 +34,7 @@ service::ServiceSettings SettingsOf(const ServeOptions& o) {
   if (!o.config_path.empty()) s = service::LoadServiceSettings(o.config_path);
   if (o.listen) s.listen = *o.listen;
   if (o.port) s.port = *o.port;
+  if (o.http_port) s.http_port = *o.http_port;
   if (o.unix_socket) s.unix_socket = *o.unix_socket;
   if (o.token_file) s.token_file = *o.token_file;
   if (o.vehicles) s.vehicles_dir = *o.vehicles;
@@ -63,14 +66,18 @@ void RunServe(const ServeOptions& options) {
   if (resumed > 0) spdlog::info("{} sessions resumed from {}", resumed, dispatcher.settings().journal_dir.string());
   service::Server server(dispatcher);
   server.Listen();
+  server.CatchSignals();  // before the listening line: a SIGTERM right after it stops gracefully
   const nlohmann::ordered_json listening{
       {"type", "listening"},
       {"tcp", server.tcp_endpoint()},
       {"unix", server.unix_socket().empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(server.unix_socket())},
-      {"resumed_sessions", resumed}};
+      {"resumed_sessions", resumed},
+      {"http", server.live_view_url().empty() ? nlohmann::ordered_json(nullptr)
+                                              : nlohmann::ordered_json(server.live_view_url())}};
   std::cout << listening.dump() << std::endl;
   spdlog::info("rowloc serve: listening on {}{}", server.tcp_endpoint(),
                server.unix_socket().empty() ? "" : " and " + server.unix_socket());
+  if (!server.live_view_url().empty()) spdlog::info("rowloc serve: live view at {}", server.live_view_url());
   server.Run();
   spdlog::info("rowloc serve: stopped");
 }
@@ -91,6 +98,9 @@ void RegisterServeCommand(CLI::App& app) {
   cmd->add_option("--journal-dir", o->journal_dir, "Session journals (resumed at start); default: none");
   cmd->add_option("--fsync", o->fsync, "Journal fsync: none, interval (default) or always");
   cmd->add_option("--threads", o->threads, "I/O and filter threads (default 2)");
+  cmd->add_option("--http-port", o->http_port,
+                  "Serve the live view (browser) on this port, same address (0: any free port, printed on stdout; "
+                  "default: off)");
   cmd->callback([o] { RunReportingInputErrors("serve", [&o] { RunServe(*o); }); });
 }
 

@@ -5,7 +5,9 @@
 // Errors (unreadable or invalid scenario, a route the vehicle cannot drive, unwritable output)
 // exit with status 2 and name the file, key and reason.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/sim/simulation.hpp"
 
@@ -14,7 +16,6 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,12 +33,6 @@ struct SimulateOptions {
   bool no_baselines = false;
 };
 
-std::ofstream OpenOutput(const std::filesystem::path& path) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
-  return out;
-}
-
 void WriteTrueRowMap(const sim::Scenario& scenario, const std::filesystem::path& path) {
   const sim::RowWorld world(*scenario.world);
   const geometry::RowMap map =
@@ -47,18 +42,24 @@ void WriteTrueRowMap(const sim::Scenario& scenario, const std::filesystem::path&
 }
 
 void RunSimulate(const SimulateOptions& o) {
-  const sim::Scenario scenario = sim::LoadScenario(o.scenario_path);
   const std::filesystem::path dir(o.output_dir);
+  const auto file = [&dir](const char* name) { return (dir / name).string(); };
+  CheckCommandFiles({{"scenario", o.scenario_path}},
+                    {{"--output", file("sensors.ndjson")}, {"--output", file("truth.ndjson")},
+                     {"--output", file("baseline-gnss.ndjson")}, {"--output", file("baseline-odometry.ndjson")},
+                     {"--output", file("row-map.geojson")}});
+  const sim::Scenario scenario = sim::LoadScenario(o.scenario_path);
   std::filesystem::create_directories(dir);
-  std::ofstream sensors = OpenOutput(dir / "sensors.ndjson");
-  std::ofstream truth = OpenOutput(dir / "truth.ndjson");
-  std::ofstream baseline_gnss, baseline_odometry;
-  sim::SimulationOutputs outputs{&sensors, &truth, nullptr, nullptr};
+  // Temporaries renamed over the targets only when the whole run succeeded (mapio::OutputFile).
+  mapio::OutputFile sensors(dir / "sensors.ndjson");
+  mapio::OutputFile truth(dir / "truth.ndjson");
+  std::unique_ptr<mapio::OutputFile> baseline_gnss, baseline_odometry;
+  sim::SimulationOutputs outputs{&sensors.stream(), &truth.stream(), nullptr, nullptr};
   if (!o.no_baselines) {
-    baseline_gnss = OpenOutput(dir / "baseline-gnss.ndjson");
-    baseline_odometry = OpenOutput(dir / "baseline-odometry.ndjson");
-    outputs.baseline_gnss = &baseline_gnss;
-    outputs.baseline_odometry = &baseline_odometry;
+    baseline_gnss = std::make_unique<mapio::OutputFile>(dir / "baseline-gnss.ndjson");
+    baseline_odometry = std::make_unique<mapio::OutputFile>(dir / "baseline-odometry.ndjson");
+    outputs.baseline_gnss = &baseline_gnss->stream();
+    outputs.baseline_odometry = &baseline_odometry->stream();
   }
   sim::SimulationOptions options;
   options.seed = o.seed;
@@ -74,6 +75,10 @@ void RunSimulate(const SimulateOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const sim::SimulationSummary s = sim::RunSimulation(scenario, outputs, options);
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  sensors.Commit();
+  truth.Commit();
+  if (baseline_gnss) baseline_gnss->Commit();
+  if (baseline_odometry) baseline_odometry->Commit();
   if (scenario.world) WriteTrueRowMap(scenario, dir / "row-map.geojson");
   spdlog::info("{:.1f} s simulated ({:.1f} m) in {:.2f} s wall time: {:.0f}x real time", s.duration_s, s.distance_m,
                wall_s, wall_s > 0.0 ? s.duration_s / wall_s : 0.0);
@@ -95,7 +100,7 @@ void RegisterSimulateCommand(CLI::App& app) {
   cmd->add_option("scenario", o->scenario_path, "Scenario file (docs/simulation-scenarios.md)")->required();
   cmd->add_option("-o,--output", o->output_dir, "Run directory (created if missing)")->required();
   cmd->add_option("--seed", o->seed, "Override the scenario's seed (Monte-Carlo runs)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(NonNegativeNumber());
   cmd->add_flag("--no-baselines", o->no_baselines, "Do not write the GNSS and odometry baseline estimates");
   cmd->callback([o] { RunReportingInputErrors("simulate", [&o] { RunSimulate(*o); }); });
 }

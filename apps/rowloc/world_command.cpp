@@ -10,6 +10,7 @@
 //                        voxel of the surface, and no lane probe (half a spacing left of each row,
 //                        mid-band) is occupied.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
@@ -183,6 +184,10 @@ OctoMapResult WriteCheckedOctoMap(const sim::RowWorld& world, const mapping::Poi
 }
 
 void RunWorld(WorldCommandOptions o) {
+  const fs::path out(o.output_dir);
+  CheckCommandFiles({{"world", o.world_path}}, {{"--output", (out / "row-map.geojson").string()},
+                                                {"--output", (out / "survey.pcd").string()},
+                                                {"--output", (out / "canopy.bt").string()}});
   const sim::RowWorld world(sim::LoadRowWorldParams(o.world_path));
   if (!o.seed_given) o.seed = world.params().seed;
   // Everything is computed before the first file is written, so bad options leave no partial output.
@@ -231,30 +236,30 @@ void RegisterWorldCommand(CLI::App& app) {
   cmd->add_option("--slice-height", o->slice_height_m, "Height of the row map slice above the terrain [m]")
       ->capture_default_str();
   cmd->add_option("--step", o->step_m, "Station step of the row map outlines [m]")
-      ->check(CLI::Range(1e-4, 10.0))
+      ->check(FiniteInRange(1e-4, 10.0, "RANGE"))
       ->capture_default_str();
   cmd->add_option("--survey-spacing", o->survey_spacing_m, "Survey point spacing on the canopy surface [m]")
-      ->check(CLI::Range(1e-3, 10.0))
+      ->check(FiniteInRange(1e-3, 10.0, "RANGE"))
       ->capture_default_str();
   cmd->add_option("--survey-noise", o->survey_noise_m, "Survey noise sigma along the surface normal [m]")
-      ->check(CLI::Range(0.0, 1.0))
+      ->check(FiniteInRange(0.0, 1.0, "RANGE"))
       ->capture_default_str();
   cmd->add_option("--survey-dropout", o->survey_dropout, "Fraction of survey points dropped")
-      ->check(CLI::Range(0.0, 0.99))
+      ->check(FiniteInRange(0.0, 0.99, "RANGE"))
       ->capture_default_str();
   cmd->add_flag("--survey-terrain", o->survey_terrain, "Also sample the ground not covered by canopy");
   cmd->add_option("--terrain-spacing", o->terrain_spacing_m, "Survey point spacing on the ground [m]")
-      ->check(CLI::Range(1e-3, 100.0))
+      ->check(FiniteInRange(1e-3, 100.0, "RANGE"))
       ->capture_default_str();
   cmd->add_option("--octomap-resolution", o->octomap_resolution_m, "OctoMap voxel size [m]")
-      ->check(CLI::Range(2e-3, 20.0))
+      ->check(FiniteInRange(2e-3, 20.0, "RANGE"))
       ->capture_default_str();
   cmd->add_option("--seed", o->seed, "Seed of the survey sampling (default: the world's seed)");
   cmd->add_flag("--no-survey", o->no_survey, "Do not write survey.pcd");
   cmd->add_flag("--no-octomap", o->no_octomap, "Do not write canopy.bt");
   cmd->callback([o, cmd] {
     o->seed_given = cmd->count("--seed") > 0;
-    RunWorld(*o);
+    RunReportingInputErrors("world", [&o] { RunWorld(*o); });
   });
 }
 

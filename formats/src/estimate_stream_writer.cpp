@@ -39,6 +39,27 @@ ordered_json CalibrationJson(const char* type, const std::vector<WheelCalibratio
   return out;
 }
 
+/// `sensor_health`: {sensor: {state, reason, accepted, gated, skipped, refused}}; unique non-empty
+/// names, state one of "ok", "suspect", "excluded".
+ordered_json HealthJson(const char* type, const std::vector<SensorHealthRecord>& sensors) {
+  ordered_json out = ordered_json::object();
+  for (const SensorHealthRecord& h : sensors) {
+    if (h.sensor.empty() || out.contains(h.sensor)) Refuse(type, "sensor_health names must be unique and non-empty");
+    if (h.state != "ok" && h.state != "suspect" && h.state != "excluded") {
+      Refuse(type, "sensor_health of '" + h.sensor + "': state must be ok, suspect or excluded, got '" + h.state + "'");
+    }
+    ordered_json entry = ordered_json::object();
+    entry["state"] = h.state;
+    entry["reason"] = h.reason;
+    entry["accepted"] = h.accepted;
+    entry["gated"] = h.gated;
+    entry["skipped"] = h.skipped;
+    entry["refused"] = h.refused;
+    out[h.sensor] = std::move(entry);
+  }
+  return out;
+}
+
 }  // namespace
 
 EstimateLogWriter::EstimateLogWriter(std::ostream& out, const std::string& source, const std::string& vehicle,
@@ -87,6 +108,7 @@ void EstimateLogWriter::Write(const EstimateRecord& r) {
     j["slip"] = slip;
   }
   if (!r.wheel_calibration.empty()) j["wheel_calibration"] = CalibrationJson(type, r.wheel_calibration);
+  if (!r.sensor_health.empty()) j["sensor_health"] = HealthJson(type, r.sensor_health);
   out_ << j.dump() << '\n';
   if (!out_) throw std::runtime_error("estimate log: write failed");
   last_time_s_ = r.time_s;

@@ -84,6 +84,13 @@ class JsonFields {
     return number;
   }
 
+  /// A number in (0, high].
+  double PositiveUpTo(const std::string& key, double high) const {
+    const double number = Positive(key);
+    if (number > high) Fail(key, FormatNumber(number) + " is not in (0, " + FormatNumber(high) + "]");
+    return number;
+  }
+
   std::string String(const std::string& key) const {
     const json& value = Required(key);
     if (!value.is_string()) Fail(key, std::string("must be a string, got ") + value.type_name());

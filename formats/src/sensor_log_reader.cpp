@@ -9,6 +9,8 @@
 #include <array>
 #include <limits>
 #include <numbers>
+#include <set>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -21,6 +23,19 @@ using detail::LineLocation;
 using json = nlohmann::json;
 
 constexpr std::string_view kProtocolMajor = "rowloc/1";
+
+// Physical domains of message values (docs/protocol.md §1, "Value domains"): far beyond any sensor
+// of a field robot, but finite enough that the filter's arithmetic cannot overflow (a torque of
+// 1e308 aborted a replay with no line or key, issue 26). A value outside is refused with its key.
+constexpr double kMaxAbsAltitudeM = 1e5;
+constexpr double kMaxSigmaM = 1e6;            // GNSS sigmas
+constexpr double kMaxAbsAccelerationMps2 = 1e3;
+constexpr double kMaxAbsRateRadps = 1e3;      // gyro, wheel speeds
+constexpr double kMaxAbsTorqueNm = 1e6;
+constexpr double kMaxAbsWheelAngleRad = 1e12; // cumulative encoder angle
+constexpr double kMaxRangeM = 1e3;            // ultrasonic
+constexpr double kMaxAbsVelocityMps = 1e3;    // VIO
+constexpr double kMaxVelocitySigmaMps = 1e3;
 
 /// nlohmann's message without its "[json.exception.parse_error.101] " prefix, and without the
 /// "line 1, " of a position (the text parsed is one line).
@@ -104,18 +119,24 @@ bool IsProtocolMajor1(const std::string& protocol) {
          std::all_of(rest.begin() + 1, rest.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
 
-/// A header list of names: an array of non-empty, distinct strings.
-std::vector<std::string> ReadNames(const JsonFields& fields, const std::string& key) {
+/// A header list of at most max_count names: an array of non-empty, distinct strings (distinctness
+/// checked with a set: linear in the names, not quadratic).
+std::vector<std::string> ReadNames(const JsonFields& fields, const std::string& key, std::size_t max_count) {
   const json& value = fields.Required(key);
   if (!value.is_array()) fields.Fail(key, std::string("must be an array of names, got ") + value.type_name());
+  if (value.size() > max_count) {
+    fields.Fail(key, std::to_string(value.size()) + " names, more than the limit of " + std::to_string(max_count));
+  }
   std::vector<std::string> names;
+  std::set<std::string_view> seen;
+  names.reserve(value.size());
   for (std::size_t i = 0; i < value.size(); ++i) {
     const std::string item_key = key + "[" + std::to_string(i) + "]";
     if (!value[i].is_string()) fields.Fail(item_key, std::string("must be a string, got ") + value[i].type_name());
-    std::string name = value[i].get<std::string>();
+    const std::string& name = value[i].get_ref<const std::string&>();
     if (name.empty()) fields.Fail(item_key, "empty name");
-    if (IndexOf(names, name)) fields.Fail(item_key, "duplicate name " + Quoted(name));
-    names.push_back(std::move(name));
+    if (!seen.insert(name).second) fields.Fail(item_key, "duplicate name " + Quoted(name));
+    names.push_back(name);
   }
   return names;
 }
@@ -137,9 +158,9 @@ LogHeader HeaderFromFields(const JsonFields& fields) {
   const JsonFields origin = fields.Object("origin");
   header.origin.latitude_deg = origin.NumberIn("latitude_deg", -90.0, 90.0);
   header.origin.longitude_deg = origin.NumberIn("longitude_deg", -180.0, 180.0);
-  header.origin.altitude_m = origin.Number("altitude_m");
-  header.wheels = ReadNames(fields, "wheels");
-  header.ultrasonic = ReadNames(fields, "ultrasonic");
+  header.origin.altitude_m = origin.NumberIn("altitude_m", -kMaxAbsAltitudeM, kMaxAbsAltitudeM);
+  header.wheels = ReadNames(fields, "wheels", kMaxLogWheels);
+  header.ultrasonic = ReadNames(fields, "ultrasonic", kMaxLogUltrasonicSensors);
   if (fields.object().contains("reorder_window_s")) {
     header.reorder_window_s = fields.NumberIn("reorder_window_s", 0.0, 3600.0);
   }
@@ -161,14 +182,18 @@ SensorMessage ReadGps(const JsonFields& fields, const LogHeader&, double time_s)
   m.fix = *known;
   if (m.fix == GnssFixQuality::kNone) return m;  // no solution: position keys are absent (not read)
   m.position = GpsPosition{fields.NumberIn("latitude_deg", -90.0, 90.0),
-                           fields.NumberIn("longitude_deg", -180.0, 180.0), fields.Number("altitude_m"),
-                           fields.Positive("sigma_horizontal_m"), fields.Positive("sigma_vertical_m")};
+                           fields.NumberIn("longitude_deg", -180.0, 180.0),
+                           fields.NumberIn("altitude_m", -kMaxAbsAltitudeM, kMaxAbsAltitudeM),
+                           fields.PositiveUpTo("sigma_horizontal_m", kMaxSigmaM),
+                           fields.PositiveUpTo("sigma_vertical_m", kMaxSigmaM)};
   return m;
 }
 
 SensorMessage ReadImu(const JsonFields& fields, const LogHeader&, double time_s) {
-  return ImuMessage{time_s, fields.String("sensor"), fields.Number("accel_x_mps2"), fields.Number("accel_y_mps2"),
-                    fields.Number("gyro_z_radps")};
+  constexpr double kA = kMaxAbsAccelerationMps2;
+  return ImuMessage{time_s, fields.String("sensor"), fields.NumberIn("accel_x_mps2", -kA, kA),
+                    fields.NumberIn("accel_y_mps2", -kA, kA),
+                    fields.NumberIn("gyro_z_radps", -kMaxAbsRateRadps, kMaxAbsRateRadps)};
 }
 
 /// Values of an object keyed by wheel name, in the header's wheel order (nullopt: not in the
@@ -185,10 +210,10 @@ std::vector<std::optional<double>> ReadPerWheel(const JsonFields& fields, const 
   return result;
 }
 
-/// ReadPerWheel for an object that must carry every wheel of the header.
-std::vector<double> ReadEveryWheel(const JsonFields& fields, const std::string& key, const LogHeader& header) {
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  const std::vector<std::optional<double>> values = ReadPerWheel(fields, key, header, -kInf, kInf);
+/// ReadPerWheel for an object that must carry every wheel of the header, values in [-max_abs, max_abs].
+std::vector<double> ReadEveryWheel(const JsonFields& fields, const std::string& key, const LogHeader& header,
+                                   double max_abs) {
+  const std::vector<std::optional<double>> values = ReadPerWheel(fields, key, header, -max_abs, max_abs);
   std::vector<double> result;
   result.reserve(values.size());
   for (std::size_t i = 0; i < values.size(); ++i) {
@@ -201,9 +226,12 @@ std::vector<double> ReadEveryWheel(const JsonFields& fields, const std::string& 
 }
 
 SensorMessage ReadWheels(const JsonFields& fields, const LogHeader& header, double time_s) {
-  WheelsMessage m{time_s, ReadEveryWheel(fields, "speed_radps", header), std::nullopt, std::nullopt};
-  if (fields.object().contains("torque_nm")) m.torque_nm = ReadEveryWheel(fields, "torque_nm", header);
-  if (fields.object().contains("angle_rad")) m.angle_rad = ReadEveryWheel(fields, "angle_rad", header);
+  WheelsMessage m{time_s, ReadEveryWheel(fields, "speed_radps", header, kMaxAbsRateRadps), std::nullopt,
+                  std::nullopt};
+  if (fields.object().contains("torque_nm")) m.torque_nm = ReadEveryWheel(fields, "torque_nm", header, kMaxAbsTorqueNm);
+  if (fields.object().contains("angle_rad")) {
+    m.angle_rad = ReadEveryWheel(fields, "angle_rad", header, kMaxAbsWheelAngleRad);
+  }
   return m;
 }
 
@@ -220,13 +248,14 @@ SensorMessage ReadUltrasonic(const JsonFields& fields, const LogHeader& header, 
                               NameList(header.ultrasonic) + ")");
   }
   m.sensor_index = *index;
-  if (!fields.Required("range_m").is_null()) m.range_m = fields.Positive("range_m");  // null: no echo
+  if (!fields.Required("range_m").is_null()) m.range_m = fields.PositiveUpTo("range_m", kMaxRangeM);  // null: no echo
   return m;
 }
 
 SensorMessage ReadVio(const JsonFields& fields, const LogHeader&, double time_s) {
-  return VioMessage{time_s, fields.String("sensor"), fields.Number("velocity_x_mps"),
-                    fields.Number("velocity_y_mps"), fields.Positive("sigma_mps")};
+  constexpr double kV = kMaxAbsVelocityMps;
+  return VioMessage{time_s, fields.String("sensor"), fields.NumberIn("velocity_x_mps", -kV, kV),
+                    fields.NumberIn("velocity_y_mps", -kV, kV), fields.PositiveUpTo("sigma_mps", kMaxVelocitySigmaMps)};
 }
 
 using MessageParser = SensorMessage (*)(const JsonFields&, const LogHeader&, double);
@@ -308,21 +337,53 @@ std::optional<SensorMessage> SensorLogReader::Next() {
 }
 
 bool SensorLogReader::ReadLine(std::string& line) {
-  while (std::getline(in_, line)) {
+  if (skip_rest_of_line_) {  // the rest of an overlong line: skipped, never held in memory
+    in_.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    skip_rest_of_line_ = false;
+  }
+  for (;;) {
+    const LineEnd end = ReadBoundedLine(line);
+    if (end == LineEnd::kEndOfStream) return false;
     ++line_number_;
-    const bool terminated = !in_.eof();  // getline stopped at a '\n', not at the end of the stream
+    if (end == LineEnd::kTooLong) {
+      skip_rest_of_line_ = true;
+      throw SensorLogError(source_, line_number_, "line",
+                           "longer than 1 MiB (" + std::to_string(kMaxLogLineBytes) + " bytes, the protocol's limit)");
+    }
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.size() > kMaxLogLineBytes) {
       throw SensorLogError(source_, line_number_, "line",
-                           "longer than " + std::to_string(kMaxLogLineBytes) + " bytes (the protocol's limit)");
+                           "longer than 1 MiB (" + std::to_string(kMaxLogLineBytes) + " bytes, the protocol's limit)");
     }
-    if (!terminated) {
+    if (end == LineEnd::kUnterminated) {
       throw SensorLogError(source_, line_number_, "line", "not terminated by a newline (a truncated log?)");
     }
     if (!line.empty()) return true;
   }
-  if (in_.bad()) throw SensorLogError(source_, line_number_ + 1, "line", "read error");
-  return false;
+}
+
+SensorLogReader::LineEnd SensorLogReader::ReadBoundedLine(std::string& line) {
+  // The limit plus one byte for a "\r" before the "\n"; one more byte proves the line too long.
+  constexpr std::size_t kMaxHeld = kMaxLogLineBytes + 2;
+  line.clear();
+  char chunk[1 << 14];
+  for (;;) {
+    in_.getline(chunk, sizeof chunk);  // stops at '\n' (extracted), at the end, or with a full chunk
+    const auto count = static_cast<std::size_t>(in_.gcount());
+    if (in_.bad()) throw SensorLogError(source_, line_number_ + 1, "line", "read error");
+    if (in_.eof()) {  // the stream ended inside the line (or before it)
+      line.append(chunk, count);
+      if (line.size() >= kMaxHeld) return LineEnd::kTooLong;
+      return line.empty() ? LineEnd::kEndOfStream : LineEnd::kUnterminated;
+    }
+    if (!in_.fail()) {  // '\n' found and extracted (counted by gcount, not stored)
+      line.append(chunk, count - 1);
+      return line.size() >= kMaxHeld ? LineEnd::kTooLong : LineEnd::kNewline;
+    }
+    in_.clear();  // a full chunk without '\n': go on, up to the limit
+    line.append(chunk, count);
+    if (line.size() >= kMaxHeld) return LineEnd::kTooLong;
+  }
 }
 
 }  // namespace rowloc::formats

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -15,89 +17,124 @@ namespace {
 
 using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
 
-bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
-bool IsProbability(double value) { return std::isfinite(value) && value > 0.0 && value < 1.0; }
-
 constexpr int kMaxSpeedUpdateIterations = 10;  ///< wheels.speed_update_iterations (1 to this)
 
-/// What a value must be: finite and > 0 (the default), in (0, 1), finite and >= 0, or in [0, 1).
-enum class Domain { kPositive, kProbability, kNonNegative, kFraction };
+/// What a value must be: in [min, max] (both finite: a physical range, not only a sign), a gate's
+/// probability in [0.5, 1) (below 0.5 a gate rejects most consistent measurements), or a correlation
+/// in [0, 1).
+enum class Domain { kRange, kGateProbability, kCorrelation };
 
 struct Rule {
   const char* key;
   double value;
-  Domain domain = Domain::kPositive;
+  double min = 0.0;
+  double max = 0.0;
+  Domain domain = Domain::kRange;
 };
 
+constexpr double kMinGateProbability = 0.5;
+Rule Probability(const char* key, double value) { return {key, value, kMinGateProbability, 1.0, Domain::kGateProbability}; }
+Rule Correlation(const char* key, double value) { return {key, value, 0.0, 1.0, Domain::kCorrelation}; }
+
+/// Every numeric value with its domain. The ranges are wide around what a field robot needs (the
+/// shipped filter files use values decades inside them) but exclude the values that hang or overflow
+/// the filter: a prediction step of 1e-300 s (no progress), a sigma of 1e300 (its square overflows),
+/// a gap of 1e300 s (10^16 prediction steps).
 std::vector<Rule> Rules(const FilterConfig& c) {
   const ProcessNoise& q = c.process_noise;
   const SlipAwareOdometryConfig& s = c.slip_aware_odometry;
   const InitialisationConfig& i = c.initialisation;
+  const GpsNoise& g = c.gps;
+  const WheelNoise& w = c.wheels;
+  const MapAidedConfig& a = c.map_aided;
   return {
-      {"process_noise.jerk_mps3_per_sqrt_hz", q.jerk_mps3_per_sqrt_hz},
-      {"process_noise.yaw_acceleration_radps2_per_sqrt_hz", q.yaw_acceleration_radps2_per_sqrt_hz},
-      {"process_noise.velocity_mps_per_sqrt_hz", q.velocity_mps_per_sqrt_hz},
-      {"process_noise.steering_rate_radps_per_sqrt_hz", q.steering_rate_radps_per_sqrt_hz},
-      {"process_noise.gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz},
-      {"process_noise.accel_bias_mps2_per_sqrt_hz", q.accel_bias_mps2_per_sqrt_hz},
-      {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m},
-      {"slip_aware_odometry.slip_compliance_initial", s.slip_compliance_initial},
-      {"slip_aware_odometry.slip_compliance_sigma", s.slip_compliance_sigma},
-      {"slip_aware_odometry.max_model_slip", s.max_model_slip, Domain::kProbability},
-      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, Domain::kNonNegative},
-      {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, Domain::kNonNegative},
-      {"slip_aware_odometry.slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation, Domain::kFraction},
-      {"slip_aware_odometry.rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation,
-       Domain::kFraction},
-      {"slip_aware_odometry.rolling_radius_prior_wheel_correlation", s.rolling_radius_prior_wheel_correlation,
-       Domain::kFraction},
-      {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, Domain::kNonNegative},
-      {"slip_aware_odometry.carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m,
-       Domain::kNonNegative},
-      {"slip_aware_odometry.carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma,
-       Domain::kNonNegative},
-      {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
-      {"initialisation.heading_baseline_m", i.heading_baseline_m},
-      {"initialisation.heading_sigma_rad", i.heading_sigma_rad},
-      {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps},
-      {"initialisation.yaw_rate_sigma_radps", i.yaw_rate_sigma_radps},
-      {"initialisation.acceleration_sigma_mps2", i.acceleration_sigma_mps2},
-      {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
-      {"initialisation.steering_sigma_rad", i.steering_sigma_rad},
-      {"initialisation.accel_bias_sigma_mps2", i.accel_bias_sigma_mps2},
-      {"gps.sigma_scale", c.gps.sigma_scale},
-      {"gps.sigma_floor_rtk_fixed_m", c.gps.sigma_floor_rtk_fixed_m},
-      {"gps.sigma_floor_rtk_float_m", c.gps.sigma_floor_rtk_float_m},
-      {"gps.sigma_floor_sbas_m", c.gps.sigma_floor_sbas_m},
-      {"gps.gate_probability", c.gps.gate_probability, Domain::kProbability},
-      {"gps.reacquire_after_s", c.gps.reacquire_after_s},
-      {"gps.bias_sigma_m", c.gps.bias_sigma_m},
-      {"gps.bias_time_constant_s", c.gps.bias_time_constant_s},
-      {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2},
-      {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps},
-      {"imu.gate_probability", c.imu.gate_probability, Domain::kProbability},
-      {"wheels.speed_sigma_radps", c.wheels.speed_sigma_radps},
-      {"wheels.speed_sigma_fraction", c.wheels.speed_sigma_fraction, Domain::kNonNegative},
-      {"wheels.lateral_velocity_sigma_mps", c.wheels.lateral_velocity_sigma_mps},
-      {"wheels.gate_probability", c.wheels.gate_probability, Domain::kProbability},
-      {"wheels.max_speed_radps", c.wheels.max_speed_radps},
-      {"wheels.encoder_low_pass_time_constant_s", c.wheels.encoder_low_pass_time_constant_s, Domain::kNonNegative},
-      {"wheels.angle_sigma_rad", c.wheels.angle_sigma_rad},
-      {"wheels.angle_rate_noise_radps_per_sqrt_hz", c.wheels.angle_rate_noise_radps_per_sqrt_hz},
-      {"wheels.angle_max_prediction_sigma_rad", c.wheels.angle_max_prediction_sigma_rad},
-      {"steering.angle_sigma_rad", c.steering.angle_sigma_rad},
-      {"steering.gate_probability", c.steering.gate_probability, Domain::kProbability},
-      {"vio.sigma_scale", c.vio.sigma_scale},
-      {"vio.gate_probability", c.vio.gate_probability, Domain::kProbability},
-      {"map_aided.range_sigma_m", c.map_aided.range_sigma_m},
-      {"map_aided.cone_half_angle_rad", c.map_aided.cone_half_angle_rad},
-      {"map_aided.max_range_m", c.map_aided.max_range_m},
-      {"map_aided.k_sigma", c.map_aided.k_sigma},
-      {"map_aided.row_smoothing_m", c.map_aided.row_smoothing_m},
-      {"map_aided.gate_probability", c.map_aided.gate_probability, Domain::kProbability},
-      {"max_prediction_step_s", c.max_prediction_step_s},
-      {"max_prediction_gap_s", c.max_prediction_gap_s},
+      {"process_noise.jerk_mps3_per_sqrt_hz", q.jerk_mps3_per_sqrt_hz, 1e-6, 1e3},
+      {"process_noise.yaw_acceleration_radps2_per_sqrt_hz", q.yaw_acceleration_radps2_per_sqrt_hz, 1e-6, 1e3},
+      {"process_noise.velocity_mps_per_sqrt_hz", q.velocity_mps_per_sqrt_hz, 1e-9, 100.0},
+      {"process_noise.steering_rate_radps_per_sqrt_hz", q.steering_rate_radps_per_sqrt_hz, 1e-6, 100.0},
+      {"process_noise.gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz, 1e-12, 1.0},
+      {"process_noise.accel_bias_mps2_per_sqrt_hz", q.accel_bias_mps2_per_sqrt_hz, 1e-12, 10.0},
+      {"slip_aware_odometry.rolling_radius_sigma_m", s.rolling_radius_sigma_m, 1e-6, 1.0},
+      {"slip_aware_odometry.slip_compliance_initial", s.slip_compliance_initial, 1e-6, 1e3},
+      {"slip_aware_odometry.slip_compliance_sigma", s.slip_compliance_sigma, 1e-6, 1e3},
+      {"slip_aware_odometry.max_model_slip", s.max_model_slip, 0.01, 0.99},
+      {"slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m, 0.0, 1.0},
+      {"slip_aware_odometry.slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m, 0.0, 10.0},
+      Correlation("slip_aware_odometry.slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation),
+      Correlation("slip_aware_odometry.rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation),
+      Correlation("slip_aware_odometry.rolling_radius_prior_wheel_correlation", s.rolling_radius_prior_wheel_correlation),
+      {"slip_aware_odometry.torque_sigma_nm", s.torque_sigma_nm, 0.0, 1e4},
+      {"slip_aware_odometry.carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m, 0.0, 1.0},
+      {"slip_aware_odometry.carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma, 0.0, 1e3},
+      {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s, 1e-9, 10.0},
+      {"initialisation.heading_baseline_m", i.heading_baseline_m, 0.1, 100.0},
+      {"initialisation.heading_sigma_rad", i.heading_sigma_rad, 1e-6, 10.0},
+      {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps, 1e-6, 100.0},
+      {"initialisation.yaw_rate_sigma_radps", i.yaw_rate_sigma_radps, 1e-6, 100.0},
+      {"initialisation.acceleration_sigma_mps2", i.acceleration_sigma_mps2, 1e-6, 1e3},
+      {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps, 1e-9, 10.0},
+      {"initialisation.steering_sigma_rad", i.steering_sigma_rad, 1e-9, 10.0},
+      {"initialisation.accel_bias_sigma_mps2", i.accel_bias_sigma_mps2, 1e-9, 100.0},
+      {"gps.sigma_scale", g.sigma_scale, 1e-3, 1e3},
+      {"gps.sigma_floor_rtk_fixed_m", g.sigma_floor_rtk_fixed_m, 1e-6, 1e3},
+      {"gps.sigma_floor_rtk_float_m", g.sigma_floor_rtk_float_m, 1e-6, 1e3},
+      {"gps.sigma_floor_sbas_m", g.sigma_floor_sbas_m, 1e-6, 1e3},
+      Probability("gps.gate_probability", g.gate_probability),
+      {"gps.reacquire_after_s", g.reacquire_after_s, 0.01, 3600.0},
+      {"gps.bias_sigma_m", g.bias_sigma_m, 1e-6, 1e3},
+      {"gps.bias_time_constant_s", g.bias_time_constant_s, 1e-3, 1e6},
+      {"imu.accel_sigma_mps2", c.imu.accel_sigma_mps2, 1e-9, 1e3},
+      {"imu.gyro_sigma_radps", c.imu.gyro_sigma_radps, 1e-9, 100.0},
+      Probability("imu.gate_probability", c.imu.gate_probability),
+      {"wheels.speed_sigma_radps", w.speed_sigma_radps, 1e-9, 1e3},
+      {"wheels.speed_sigma_fraction", w.speed_sigma_fraction, 0.0, 10.0},
+      // Up to 1e6 m/s: a sigma that large switches the non-holonomic constraint off (tests do).
+      {"wheels.lateral_velocity_sigma_mps", w.lateral_velocity_sigma_mps, 1e-9, 1e6},
+      Probability("wheels.gate_probability", w.gate_probability),
+      {"wheels.max_speed_radps", w.max_speed_radps, 1e-3, 1e4},
+      {"wheels.encoder_low_pass_time_constant_s", w.encoder_low_pass_time_constant_s, 0.0, 10.0},
+      {"wheels.angle_sigma_rad", w.angle_sigma_rad, 1e-9, 10.0},
+      {"wheels.angle_rate_noise_radps_per_sqrt_hz", w.angle_rate_noise_radps_per_sqrt_hz, 1e-12, 100.0},
+      {"wheels.angle_max_prediction_sigma_rad", w.angle_max_prediction_sigma_rad, 1e-9, 100.0},
+      {"steering.angle_sigma_rad", c.steering.angle_sigma_rad, 1e-9, 10.0},
+      Probability("steering.gate_probability", c.steering.gate_probability),
+      {"vio.sigma_scale", c.vio.sigma_scale, 1e-3, 1e3},
+      Probability("vio.gate_probability", c.vio.gate_probability),
+      {"map_aided.range_sigma_m", a.range_sigma_m, 1e-6, 100.0},
+      {"map_aided.cone_half_angle_rad", a.cone_half_angle_rad, 1e-6, 0.5 * std::numbers::pi},
+      {"map_aided.max_range_m", a.max_range_m, 0.01, 1e3},
+      {"map_aided.k_sigma", a.k_sigma, 0.5, 100.0},
+      {"map_aided.row_smoothing_m", a.row_smoothing_m, 1e-3, 1e3},
+      Probability("map_aided.gate_probability", a.gate_probability),
+      {"max_prediction_step_s", c.max_prediction_step_s, 1e-4, 1.0},
+      {"max_prediction_gap_s", c.max_prediction_gap_s, 1e-4, 3600.0},
+      {"max_time_jump_s", c.max_time_jump_s, 1e-4, 1e6},
   };
+}
+
+/// "key must be in [min, max], got value" with short numbers (6 significant digits, like %g).
+std::optional<std::string> RuleProblem(const Rule& rule) {
+  const double v = rule.value;
+  bool ok = false;
+  std::ostringstream text;
+  text << std::setprecision(6) << rule.key << " must be in ";
+  switch (rule.domain) {
+    case Domain::kRange:
+      ok = v >= rule.min && v <= rule.max;  // false for NaN
+      text << "[" << rule.min << ", " << rule.max << "]";
+      break;
+    case Domain::kGateProbability:
+      ok = v >= kMinGateProbability && v < 1.0;
+      text << "(0, 1) and at least " << kMinGateProbability;
+      break;
+    case Domain::kCorrelation:
+      ok = v >= 0.0 && v < 1.0;
+      text << "[0, 1)";
+      break;
+  }
+  if (ok) return std::nullopt;
+  text << ", got " << v;
+  return text.str();
 }
 
 FilterConfig ReadConfig(Reader& root) {
@@ -185,6 +222,7 @@ FilterConfig ReadConfig(Reader& root) {
   }
   c.max_prediction_step_s = root.Number("max_prediction_step_s");
   c.max_prediction_gap_s = root.Number("max_prediction_gap_s");
+  c.max_time_jump_s = root.Number("max_time_jump_s");
   root.RejectUnknownKeys();
   return c;
 }
@@ -194,22 +232,7 @@ FilterConfig ReadConfig(Reader& root) {
 std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
   if (config.name.empty()) return std::string("name must not be empty");
   for (const Rule& rule : Rules(config)) {
-    switch (rule.domain) {
-      case Domain::kPositive:
-        if (!IsPositive(rule.value)) return std::string(rule.key) + " must be finite and > 0";
-        break;
-      case Domain::kProbability:
-        if (!IsProbability(rule.value)) return std::string(rule.key) + " must be in (0, 1)";
-        break;
-      case Domain::kNonNegative:
-        if (!(std::isfinite(rule.value) && rule.value >= 0.0)) return std::string(rule.key) + " must be finite and >= 0";
-        break;
-      case Domain::kFraction:
-        if (!(std::isfinite(rule.value) && rule.value >= 0.0 && rule.value < 1.0)) {
-          return std::string(rule.key) + " must be in [0, 1)";
-        }
-        break;
-    }
+    if (auto problem = RuleProblem(rule)) return problem;
   }
   if (!(config.wheels.speed_update_iterations >= 1 && config.wheels.speed_update_iterations <= kMaxSpeedUpdateIterations)) {
     return "wheels.speed_update_iterations must be from 1 to " + std::to_string(kMaxSpeedUpdateIterations);
@@ -217,6 +240,9 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {
     return std::string("map_aided.cone_half_angle_rad must be < pi/2");
+  }
+  if (config.max_time_jump_s < config.max_prediction_gap_s) {
+    return std::string("max_time_jump_s must be >= max_prediction_gap_s");
   }
   if (config.max_prediction_gap_s < config.max_prediction_step_s) {
     return std::string("max_prediction_gap_s must be >= max_prediction_step_s");

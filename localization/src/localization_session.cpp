@@ -24,6 +24,16 @@ std::vector<formats::WheelCalibrationRecord> WheelCalibrationOf(const VehicleEkf
   return wheels;
 }
 
+std::vector<formats::SensorHealthRecord> SensorHealthOf(const VehicleEkf& ekf) {
+  std::vector<formats::SensorHealthRecord> records;
+  for (const SensorHealth& h : ekf.health().Report()) {
+    if (h.state == SensorHealthState::kOk) continue;
+    records.push_back({h.sensor, std::string(SensorHealthStateName(h.state)), h.reason, h.accepted, h.gated, h.skipped,
+                       h.refused});
+  }
+  return records;
+}
+
 LocalizationSession::LocalizationSession(mapio::VehicleConfig vehicle, FilterConfig config,
                                          const formats::LogHeader& header, SessionOptions options)
     : vehicle_(vehicle),
@@ -66,6 +76,7 @@ formats::EstimateRecord LocalizationSession::EstimateOf(double time_s, const Eig
   record.heading_rad = x(StateLayout::kPhi);
   record.covariance = p.topLeftCorner<3, 3>();
   record.wheel_calibration = WheelCalibrationOf(ekf_, x, p);
+  record.sensor_health = SensorHealthOf(ekf_);
   if (tracks_) {
     record.slip = TrackSlip();
     return record;

@@ -18,6 +18,8 @@ using L = StateLayout;
 /// R_w's domain, a factor of the nominal radius (ProjectStates, ClampWheelCalibration).
 constexpr double kMinRadiusFactor = 0.5;
 constexpr double kMaxRadiusFactor = 1.5;
+/// Measurement variance of an excluded encoder's row: its reading then moves nothing (rad/s)^2.
+constexpr double kExcludedVariance = 1e12;
 
 namespace {
 
@@ -91,16 +93,24 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
 void VehicleEkf::Reset() {
   if (smoother_ && initialised_) smoother_->End(x_, p_);
   initialised_ = false;
-  anchor_enu_.reset();
+  pending_fixes_.clear();
+  travelled_m_ = 0.0;
+  odometry_time_s_.reset();
   wheel_angles_anchored_ = false;
   x_ = Eigen::VectorXd::Zero(layout_.size);
   p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
 }
 
 ProcessResult VehicleEkf::Process(const formats::SensorMessage& message) {
-  Validate(message);
-  const double t = formats::TimeOf(message);
   std::optional<std::string> gap_notice;
+  CheckTimeJump(message, gap_notice);  // a moved time base resets the filter first
+  try {
+    Validate(message);
+  } catch (const FilterInputError& e) {
+    health_.ObserveRefusal(HealthSensorName(message), e.what());
+    throw;
+  }
+  const double t = formats::TimeOf(message);
   if (initialised_ && t - time_s_ > config_.max_prediction_gap_s) {
     std::ostringstream notice;
     notice << "no message for " << t - time_s_ << " s (> max_prediction_gap_s " << config_.max_prediction_gap_s
@@ -108,18 +118,28 @@ ProcessResult VehicleEkf::Process(const formats::SensorMessage& message) {
     Reset();
     gap_notice = notice.str();
   }
+  health_.ObserveAccepted(HealthSensorName(message));
+  ObserveReadings(message);
   if (initialised_) PredictTo(t);
   time_s_ = t;
   ProcessResult result = std::visit([this](const auto& m) { return Apply(m); }, message);
-  if (gap_notice) result.notice = std::move(gap_notice);  // the re-initialisation comes first
+  if (gap_notice) {  // the re-initialisation comes first
+    result.notice = result.notice ? *gap_notice + "; " + *result.notice : std::move(gap_notice);
+  }
   ProjectStates();
+  ApplyHealthChanges(result);
   return result;
 }
 
 void VehicleEkf::PredictTo(double t) {
-  double remaining = t - time_s_;
-  while (remaining > 0.0) {
-    const double dt = std::min(remaining, config_.max_prediction_step_s);
+  const double span = t - time_s_;
+  if (!(span > 0.0)) return;
+  // At most kMaxPredictionSteps steps per message, whatever the configuration: the step grows
+  // when the span needs more (a prediction step of 1e-300 s once made no progress at all).
+  const double step = std::max(config_.max_prediction_step_s, span / static_cast<double>(kMaxPredictionSteps));
+  double remaining = span;
+  for (long steps = 0; remaining > 0.0 && steps <= kMaxPredictionSteps; ++steps) {
+    const double dt = steps == kMaxPredictionSteps ? remaining : std::min(remaining, step);
     if (smoother_) BeginTransition();
     if (layout_.has_wheel_angles()) {  // before the base step: F = F_base (I + dt E J), wheel_angle_model.hpp
       ProjectStates(true);              // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
@@ -137,19 +157,32 @@ void VehicleEkf::PredictTo(double t) {
       PredictStep(vehicle_, layout_, config_, x_, p_, dt);
     }
     remaining -= dt;
+    ++prediction_steps_;
   }
 }
 
 UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const VectorRef& innovation,
                                 const MatrixRef& jacobian, const MatrixRef& noise, double gate) {
+  if (!(innovation.allFinite() && jacobian.allFinite() && noise.allFinite())) {
+    // The inputs were checked, so this is the state or a model gone wrong: name the update.
+    std::ostringstream text;
+    text << "the " << sensor << " update at t=" << t << " s has a non-finite "
+         << (!innovation.allFinite() ? "innovation" : !jacobian.allFinite() ? "Jacobian" : "noise")
+         << ": message refused";
+    health_.ObserveRefusal(sensor, "non-finite update");
+    throw FilterInputError(text.str());
+  }
   if (smoother_) smoother_->BeginUpdate(x_, p_);
   UpdateRecord record{t, sensor, KalmanUpdate(x_, p_, innovation, jacobian, noise, gate, L::kPhi)};
+  health_.ObserveUpdate(sensor, record.outcome.accepted);
   return record;
 }
 
 ProcessResult VehicleEkf::Apply(const formats::GpsMessage& gps) {
   ProcessResult result;
   if (!gps.position) return result;  // no fix: nothing measured
+  if (last_gnss_sensor_ != gps.sensor) last_gnss_sensor_ = gps.sensor;
+  if (SkipExcluded(gps.sensor)) return result;  // a frozen receiver (sensor_health.hpp)
   const formats::GpsPosition& fix = *gps.position;
   const Eigen::Vector2d antenna = frame_.ToEnu(fix.latitude_deg, fix.longitude_deg, fix.altitude_m).head<2>();
   if (!initialised_) {
@@ -182,7 +215,7 @@ ProcessResult VehicleEkf::Apply(const formats::GpsMessage& gps) {
 
 ProcessResult VehicleEkf::Apply(const formats::ImuMessage& imu) {
   ProcessResult result;
-  if (!initialised_) return result;
+  if (!initialised_ || SkipExcluded(imu.sensor)) return result;
   // Specific force in the IMU's axes rotated into the body frame by the mount's yaw.
   const Eigen::Vector2d force = Rotation(vehicle_.imu.yaw_rad) * Eigen::Vector2d(imu.accel_x_mps2, imu.accel_y_mps2);
   const Eigen::Vector3d z(force.x(), force.y(), imu.gyro_z_radps);
@@ -198,6 +231,7 @@ ProcessResult VehicleEkf::Apply(const formats::ImuMessage& imu) {
 
 ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
   const std::size_t n = vehicle_.wheels.size();
+  if (!initialised_) AccumulateOdometry(wheels.time_s);  // with the previous message's speeds
   last_speed_radps_.assign(n, 0.0);
   if (wheels.torque_nm) {
     if (!last_torque_nm_) last_torque_nm_.emplace(n, 0.0);
@@ -222,6 +256,11 @@ ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
     const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
     b.noise.setZero(m, m);
     b.noise.diagonal() = (s * s + (f * z.array()).square()).matrix();
+    if (health_.exclusions() > 0) {  // an excluded encoder (stuck) carries no information
+      for (std::size_t i = 0; i < n; ++i) {
+        if (health_.Excluded("wheels." + vehicle_.wheels[i].name)) b.noise(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)) = kExcludedVariance;
+      }
+    }
     b.innovation = z - b.wheels.predicted;
     const bool iterated = config_.wheels.speed_update_iterations > 1;
     if (iterated) {

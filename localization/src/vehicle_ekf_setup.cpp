@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -24,12 +25,28 @@ namespace {
   throw FilterInputError(text.str());
 }
 
-void RequireFinite(const formats::SensorMessage& message, double value, const char* field) {
-  if (!std::isfinite(value)) Reject(message, std::string(field) + " must be finite");
+/// "type.field" or "type.field.wheel": the key path of a message's value as the log writes it
+/// (docs/protocol.md: per-wheel values are objects keyed by wheel name).
+std::string KeyOf(const formats::SensorMessage& message, const char* field, const std::string& wheel = "") {
+  std::string key = std::string(formats::TypeOf(message)) + "." + field;
+  if (!wheel.empty()) key += "." + wheel;
+  return key;
+}
+
+/// "key = value is outside [low, high]" with short numbers (6 significant digits).
+std::string OutsideText(const std::string& key, double value, double low, double high, const char* why = "") {
+  std::ostringstream text;
+  text << std::setprecision(6) << key << " = " << value << " is outside [" << low << ", " << high << "]" << why;
+  return text.str();
+}
+
+void RequireFinite(const formats::SensorMessage& message, double value, const char* field,
+                   const std::string& wheel = "") {
+  if (!std::isfinite(value)) Reject(message, KeyOf(message, field, wheel) + " must be finite");
 }
 
 void RequirePositive(const formats::SensorMessage& message, double value, const char* field) {
-  if (!(std::isfinite(value) && value > 0.0)) Reject(message, std::string(field) + " must be finite and > 0");
+  if (!(std::isfinite(value) && value > 0.0)) Reject(message, KeyOf(message, field) + " must be finite and > 0");
 }
 
 /// A claimed 1-sigma must be positive and below kMaxSigma (its square must stay far from overflow;
@@ -38,7 +55,7 @@ constexpr double kMaxSigma = 1e4;
 
 void RequireSigma(const formats::SensorMessage& message, double value, const char* field) {
   RequirePositive(message, value, field);
-  if (value > kMaxSigma) Reject(message, std::string(field) + " above 1e4 (out of range)");
+  if (value > kMaxSigma) Reject(message, OutsideText(KeyOf(message, field), value, 0.0, kMaxSigma, " (out of range)"));
 }
 
 /// Magnitudes no sensor of a ground robot produces: a value beyond one is a fault, refused like a
@@ -51,35 +68,38 @@ constexpr double kMaxAltitudeM = 1e5;          ///< |altitude| above the ellipso
 constexpr double kMaxRangeM = 1e3;
 constexpr double kMaxWheelAngleRad = 1e12;     ///< a wheel turning at 100 rad/s for 300 years
 
-void RequireWithin(const formats::SensorMessage& message, double value, double limit, const char* field) {
-  RequireFinite(message, value, field);
+void RequireWithin(const formats::SensorMessage& message, double value, double limit, const char* field,
+                   const std::string& wheel = "") {
+  RequireFinite(message, value, field, wheel);
   if (std::abs(value) > limit) {
-    std::ostringstream reason;
-    reason << field << " beyond " << limit << " in magnitude (no sensor produces it)";
-    Reject(message, reason.str());
+    Reject(message, OutsideText(KeyOf(message, field, wheel), value, -limit, limit, " (no sensor produces it)"));
   }
 }
-
-/// Minimum GNSS baseline for the initial heading, in fix sigmas.
-constexpr double kBaselineSigmas = 10.0;
 
 }  // namespace
 
 void VehicleEkf::Validate(const formats::SensorMessage& message) const {
   const double t = formats::TimeOf(message);
   RequireFinite(message, t, "t");
+  // Beyond 1e12 s (31,700 years) a double's resolution exceeds 0.1 ms: stamps offset by 1e18 s all
+  // round to the same instant, and the filter would stand still on them.
+  if (std::abs(t) > kMaxTimeS) Reject(message, OutsideText(KeyOf(message, "t"), t, -kMaxTimeS, kMaxTimeS, " s (a clock fault)"));
   if (t < time_s_) {
     std::ostringstream reason;
     reason << "time goes backwards (previous message at t=" << time_s_ << " s)";
     Reject(message, reason.str());
   }
   const std::size_t n = vehicle_.wheels.size();
+  const auto name = [this](std::size_t j) -> const std::string& { return vehicle_.wheels[wheel_index_[j]].name; };
   if (const auto* gps = std::get_if<formats::GpsMessage>(&message); gps && gps->position) {
     const formats::GpsPosition& p = *gps->position;
     RequireFinite(message, p.latitude_deg, "latitude_deg");
     RequireFinite(message, p.longitude_deg, "longitude_deg");
     RequireWithin(message, p.altitude_m, kMaxAltitudeM, "altitude_m");
-    if (std::abs(p.latitude_deg) > 90.0 || std::abs(p.longitude_deg) > 180.0) Reject(message, "position outside WGS84 range");
+    if (std::abs(p.latitude_deg) > 90.0) Reject(message, OutsideText(KeyOf(message, "latitude_deg"), p.latitude_deg, -90, 90));
+    if (std::abs(p.longitude_deg) > 180.0) {
+      Reject(message, OutsideText(KeyOf(message, "longitude_deg"), p.longitude_deg, -180, 180));
+    }
     RequireSigma(message, p.sigma_horizontal_m, "sigma_horizontal_m");
     RequireSigma(message, p.sigma_vertical_m, "sigma_vertical_m");
   } else if (const auto* imu = std::get_if<formats::ImuMessage>(&message)) {
@@ -89,23 +109,31 @@ void VehicleEkf::Validate(const formats::SensorMessage& message) const {
   } else if (const auto* wheels = std::get_if<formats::WheelsMessage>(&message)) {
     if (wheels->speed_radps.size() != n) Reject(message, "expected " + std::to_string(n) + " wheel speeds");
     if (wheels->torque_nm && wheels->torque_nm->size() != n) Reject(message, "expected " + std::to_string(n) + " torques");
-    for (const double w : wheels->speed_radps) {
-      RequireFinite(message, w, "speed_radps");
-      if (std::abs(w) > config_.wheels.max_speed_radps) Reject(message, "|speed_radps| above wheels.max_speed_radps");
+    for (std::size_t j = 0; j < n; ++j) {
+      const double w = wheels->speed_radps[j];
+      RequireFinite(message, w, "speed_radps", name(j));
+      const double limit = config_.wheels.max_speed_radps;
+      if (std::abs(w) > limit) {
+        Reject(message, "|speed_radps| above wheels.max_speed_radps: " + OutsideText(KeyOf(message, "speed_radps", name(j)), w, -limit, limit));
+      }
     }
     if (wheels->torque_nm) {
-      for (const double torque : *wheels->torque_nm) RequireWithin(message, torque, kMaxTorqueNm, "torque_nm");
+      for (std::size_t j = 0; j < n; ++j) RequireWithin(message, (*wheels->torque_nm)[j], kMaxTorqueNm, "torque_nm", name(j));
     }
     if (wheels->angle_rad && wheels->angle_rad->size() != n) Reject(message, "expected " + std::to_string(n) + " wheel angles");
     if (wheels->angle_rad) {
-      for (const double angle : *wheels->angle_rad) RequireWithin(message, angle, kMaxWheelAngleRad, "angle_rad");
+      for (std::size_t j = 0; j < n; ++j) RequireWithin(message, (*wheels->angle_rad)[j], kMaxWheelAngleRad, "angle_rad", name(j));
     }
   } else if (const auto* steering = std::get_if<formats::SteeringMessage>(&message)) {
     if (steering->angle_rad.size() != n) Reject(message, "expected " + std::to_string(n) + " steering entries");
-    for (const auto& angle : steering->angle_rad) {
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto& angle = steering->angle_rad[j];
       if (!angle) continue;
-      RequireFinite(message, *angle, "angle_rad");
-      if (std::abs(*angle) > vehicle_.max_steering_angle_rad + 0.1) Reject(message, "|angle_rad| above the steering limit");
+      RequireFinite(message, *angle, "angle_rad", name(j));
+      const double limit = vehicle_.max_steering_angle_rad + 0.1;
+      if (std::abs(*angle) > limit) {
+        Reject(message, "|angle_rad| above the steering limit: " + OutsideText(KeyOf(message, "angle_rad", name(j)), *angle, -limit, limit));
+      }
     }
   } else if (const auto* vio = std::get_if<formats::VioMessage>(&message)) {
     RequireWithin(message, vio->velocity_x_mps, kMaxVelocityMps, "velocity_x_mps");
@@ -118,50 +146,6 @@ void VehicleEkf::Validate(const formats::SensorMessage& message) const {
     }
     if (ranging_ && !UltrasonicIndex(ping->sensor, ping->sensor_index)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
   }
-}
-
-std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna) {
-  if (!anchor_enu_) {
-    anchor_enu_ = antenna;
-    return std::nullopt;
-  }
-  const Eigen::Vector2d moved = antenna - *anchor_enu_;
-  // The course of the baseline has an error of about sqrt(2) sigma / |baseline| rad: the baseline
-  // must also be long against the fix noise (10 sigma: 0.14 rad, inside heading_sigma_rad's default).
-  const double fix_sigma = GpsSigma(config_.gps, gps.fix, gps.position->sigma_horizontal_m);
-  if (moved.norm() < std::max(config_.initialisation.heading_baseline_m, kBaselineSigmas * fix_sigma)) {
-    return std::nullopt;
-  }
-  // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
-  // angle (a crabbing swerve robot moves at delta to its heading).
-  double mean_speed = 0.0, mean_steering = 0.0;
-  for (const double w : last_speed_radps_) mean_speed += w / static_cast<double>(last_speed_radps_.size());
-  int steered = 0;
-  for (const auto& angle : last_steering_rad_) {
-    if (angle) mean_steering += *angle, ++steered;
-  }
-  if (steered > 0) mean_steering /= steered;
-  double heading = std::atan2(moved.y(), moved.x()) - mean_steering;
-  if (mean_speed < 0.0) heading += std::numbers::pi;
-  heading = WrapAngle(heading);
-  const double c = std::cos(heading), s = std::sin(heading);
-  const Eigen::Vector2d& l = vehicle_.gnss_antenna.position_m.head<2>();
-  const Eigen::Vector2d reference = antenna - Eigen::Vector2d(c * l.x() - s * l.y(), s * l.x() + c * l.y());
-  const double sigma = fix_sigma;
-  Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
-                                               std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
-  InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance, true);
-  // Initial speed from the encoders (mean wheel-centre speed), along the mean steering direction.
-  double speed = 0.0;
-  for (std::size_t i = 0; i < last_speed_radps_.size(); ++i) {
-    speed += last_speed_radps_[i] * vehicle_.wheels[i].nominal_radius_m / static_cast<double>(last_speed_radps_.size());
-  }
-  x_(L::kVx) = speed * std::cos(mean_steering);
-  x_(L::kVy) = speed * std::sin(mean_steering);
-  std::ostringstream notice;
-  notice << "initialised at t=" << gps.time_s << " s: heading " << heading << " rad from a GNSS baseline of "
-         << moved.norm() << " m";
-  return notice.str();
 }
 
 void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
@@ -236,7 +220,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   time_s_ = t;
   gps_gated_since_s_.reset();
   initialised_ = true;
-  anchor_enu_.reset();
+  pending_fixes_.clear();
   wheel_angles_anchored_ = false;
   if (smoother_) smoother_->Start(x_, p_);
 }

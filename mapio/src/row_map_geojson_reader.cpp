@@ -2,20 +2,17 @@
 // bytes (ReadRowMapGeoJson), JSON syntax (ParseJsonText: line:column from the parser's byte
 // offset, duplicate object keys, numeric overflow) and content (RowMapReader: structure, values,
 // geometry), all reported as MapFormatError.
+#include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 
-#include <nlohmann/json.hpp>
+#include "rowloc/geometry/row_outline_validity.hpp"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cerrno>
-#include <cstring>
 #include <map>
 #include <set>
 #include <utility>
@@ -290,6 +287,7 @@ class RowMapReader {
     if (!coordinates->is_array()) Fail("\"coordinates\" must be an array, got " + TypeOf(coordinates));
     row.closed = geometry_type == "Polygon";
     row.points_m = row.closed ? ReadPolygon(*coordinates, frame) : ReadLineString(*coordinates, frame);
+    if (const auto defect = geometry::RowOutlineDefect(row)) Fail(*defect);
     return row;
   }
 
@@ -304,15 +302,23 @@ class RowMapReader {
     return id->get<std::string>();
   }
 
-  std::vector<Eigen::Vector2d> ReadLineString(const Json& coordinates, const LocalFrame& frame) const {
+  std::vector<Eigen::Vector2d> ReadLineString(const Json& coordinates, const LocalFrame& frame) {
     if (coordinates.size() < 2) {
       Fail("a LineString row needs at least 2 positions, has " + std::to_string(coordinates.size()));
     }
+    CountVertices(coordinates.size());
     return ToLocal(ReadPositions(coordinates, "coordinates", frame), "coordinates", frame);
   }
 
-  std::vector<Eigen::Vector2d> ReadPolygon(const Json& rings, const LocalFrame& frame) const {
+  std::vector<Eigen::Vector2d> ReadPolygon(const Json& rings, const LocalFrame& frame) {
     if (rings.empty()) Fail("the Polygon has no ring");
+    if (!rings[0].is_array() || (!rings[0].empty() && !rings[0][0].is_array())) {
+      // Not a ring inside: a flat list of positions (a common slip), or of something else.
+      const bool flat = rings[0].is_array() && rings[0][0].is_number();
+      Fail("\"coordinates\" of a Polygon must be an array of rings (arrays of [longitude, latitude] positions), got " +
+           (flat ? std::string("an array of positions (write \"coordinates\": [[[lon, lat], ...]], one ring)")
+                 : "coordinates[0] = " + TypeOf(rings[0]) + (rings[0].is_array() ? " of " + TypeOf(rings[0][0]) : "")));
+    }
     if (rings.size() > 1) {
       Fail("the Polygon has " + std::to_string(rings.size() - 1) +
            " hole(s) (interior rings); a row outline must be a single ring without holes");
@@ -323,6 +329,7 @@ class RowMapReader {
       Fail("a Polygon ring needs at least 4 positions (3 vertices and the closing copy of the first), has " +
            std::to_string(ring.size()));
     }
+    CountVertices(ring.size() - 1);
     const std::vector<Position> positions = ReadPositions(ring, "coordinates[0]", frame);
     if (!(positions.front() == positions.back())) {
       Fail("the Polygon ring is not closed: its last position coordinates[0][" + std::to_string(ring.size() - 1) +
@@ -374,41 +381,33 @@ class RowMapReader {
     return points;
   }
 
+  /// Counts a row's vertices against kMaxRowVertices and the map's against kMaxMapVertices, before
+  /// they are read (no memory is spent on a row that is refused).
+  void CountVertices(std::size_t count) {
+    if (count > kMaxRowVertices) {
+      Fail("the row has " + std::to_string(count) + " vertices, more than the limit of " +
+           std::to_string(kMaxRowVertices) + " per row (docs/map-format.md, \"Limits\")");
+    }
+    map_vertices_ += count;
+    if (map_vertices_ > kMaxMapVertices) {
+      Fail("the map has more than the limit of " + std::to_string(kMaxMapVertices) +
+           " vertices in all (docs/map-format.md, \"Limits\")");
+    }
+  }
+
   std::string source_;
   std::string location_;
+  std::size_t map_vertices_ = 0;
 };
 
-/// The whole content of a regular file, or MapFormatError with the system's reason.
+/// The whole content of a regular file of at most kMaxRowMapFileBytes, or MapFormatError with
+/// the reason (the system's, or the file's kind or size: input_file.hpp).
 std::string ReadFileBytes(const std::filesystem::path& path) {
-  const std::string source = path.string();
-  const auto fail = [&source](const std::string& what) { throw MapFormatError(source, "", what); };
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail(std::string("cannot open the file: ") + std::strerror(errno));
-  struct stat info {};
-  if (::fstat(fd, &info) != 0) {
-    const int error = errno;
-    ::close(fd);
-    fail(std::string("cannot examine the file: ") + std::strerror(error));
+  try {
+    return ReadInputFile(path, kMaxRowMapFileBytes, "row map file");
+  } catch (const InputFileError& e) {
+    throw MapFormatError(path.string(), "", e.reason());
   }
-  if (!S_ISREG(info.st_mode)) {
-    ::close(fd);
-    fail(S_ISDIR(info.st_mode) ? "is a directory, not a row map file" : "is not a regular file");
-  }
-  std::string bytes;
-  char buffer[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fd, buffer, sizeof buffer);
-    if (n == 0) break;
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int error = errno;
-      ::close(fd);
-      fail(std::string("cannot read the file: ") + std::strerror(error));
-    }
-    bytes.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return bytes;
 }
 
 }  // namespace

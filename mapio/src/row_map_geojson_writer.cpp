@@ -1,19 +1,15 @@
 // Writer of row map GeoJSON files (docs/map-format.md): validation, conversion of every vertex
 // from the local ENU plane (z = 0) to WGS84 with mapio::LocalFrame, one Feature per line, and an
-// atomic replace of the target file (write a temporary file, fsync, rename(2)).
+// atomic replace of the target file (mapio::OutputFile: a temporary file, fsync, rename(2); never over
+// a device or directory).
 #include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 
 #include <nlohmann/json.hpp>
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cmath>
-#include <random>
 #include <stdexcept>
-#include <system_error>
 
 namespace rowloc::mapio {
 namespace {
@@ -72,44 +68,6 @@ OrderedJson FeatureJson(const geometry::Row& row, const LocalFrame& frame) {
   return OrderedJson{{"type", "Feature"}, {"properties", {{"id", row.id}}}, {"geometry", geometry}};
 }
 
-[[noreturn]] void ThrowSystemError(int error, const std::string& what) {
-  throw std::system_error(error, std::generic_category(), what);
-}
-
-void WriteAll(int fd, const std::string& bytes, const std::string& name) {
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      ThrowSystemError(errno, "cannot write " + name);
-    }
-    done += static_cast<std::size_t>(n);
-  }
-}
-
-/// Creates a new file next to target (same file system, so that rename(2) is atomic).
-std::pair<int, std::filesystem::path> CreateTemporaryNextTo(const std::filesystem::path& target) {
-  std::random_device random;
-  for (int attempt = 0; attempt < 16; ++attempt) {
-    std::filesystem::path temp = target;
-    temp += ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(random());
-    const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0) return {fd, temp};
-    if (errno != EEXIST) ThrowSystemError(errno, "cannot create a temporary file next to " + target.string());
-  }
-  ThrowSystemError(EEXIST, "cannot create a temporary file next to " + target.string());
-}
-
-/// Makes the rename durable (best effort: the file is already complete and in place).
-void SyncDirectoryOf(const std::filesystem::path& path) {
-  const std::filesystem::path directory = path.has_parent_path() ? path.parent_path() : ".";
-  const int fd = ::open(directory.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) return;
-  ::fsync(fd);
-  ::close(fd);
-}
-
 }  // namespace
 
 std::string FormatRowMapGeoJson(const geometry::RowMap& map) {
@@ -134,22 +92,7 @@ std::string FormatRowMapGeoJson(const geometry::RowMap& map) {
 
 void WriteRowMapGeoJson(const geometry::RowMap& map, const std::filesystem::path& path) {
   const std::string text = FormatRowMapGeoJson(map);  // throws before anything touches the disk
-  const auto [fd, temp] = CreateTemporaryNextTo(path);
-  try {
-    WriteAll(fd, text, temp.string());
-    if (::fsync(fd) != 0) ThrowSystemError(errno, "cannot flush " + temp.string());
-    if (::close(fd) != 0) ThrowSystemError(errno, "cannot close " + temp.string());
-  } catch (...) {
-    ::close(fd);  // may fail with EBADF after a failed close: harmless
-    ::unlink(temp.c_str());
-    throw;
-  }
-  if (::rename(temp.c_str(), path.c_str()) != 0) {
-    const int error = errno;
-    ::unlink(temp.c_str());
-    ThrowSystemError(error, "cannot replace " + path.string());
-  }
-  SyncDirectoryOf(path);
+  WriteFileAtomically(path, text);                      // checked target, temporary, fsync, rename
 }
 
 }  // namespace rowloc::mapio

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <set>
 #include <utility>
@@ -14,6 +15,7 @@ namespace rowloc::mapio {
 namespace {
 
 using Reader = detail::JsonObjectReader<VehicleConfigError>;
+using Limits = VehicleConfigLimits;
 using nlohmann::json;
 
 constexpr std::array<std::pair<VehicleKind, std::string_view>, 4> kKindNames = {{
@@ -27,6 +29,13 @@ constexpr std::array<std::pair<VehicleKind, std::string_view>, 4> kKindNames = {
 constexpr double kGeometryToleranceM = 1e-9;
 
 bool IsPositive(double value) { return std::isfinite(value) && value > 0.0; }
+
+/// A number for messages, "%g" (6 significant digits): never hundreds of digits.
+std::string FormatShort(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
 
 std::optional<std::string> MountProblem(const SensorMount& mount, const std::string& what) {
   if (mount.name.empty()) return what + ".name must not be empty";
@@ -93,23 +102,53 @@ std::optional<std::string> FixedPairProblem(const VehicleConfig& config) {
   return std::nullopt;
 }
 
-Eigen::Vector2d ReadVector2(Reader& reader, const std::string& key) { return reader.Vector<2>(key); }
+/// A number in [low, high] (its physical domain); the message prints numbers with "%g".
+double NumberIn(Reader& reader, const std::string& key, double low, double high) {
+  const double number = reader.Number(key);
+  if (number < low || number > high) {
+    reader.Fail(reader.Key(key), "must be in [" + FormatShort(low) + ", " + FormatShort(high) + "], got " +
+                                     FormatShort(number));
+  }
+  return number;
+}
+
+/// A name of at most Limits::kMaxNameBytes bytes (emptiness is checked by VehicleConfigProblem).
+std::string ReadName(Reader& reader, const std::string& key) {
+  std::string name = reader.String(key);
+  if (name.size() > Limits::kMaxNameBytes) {
+    reader.Fail(reader.Key(key), "longer than " + std::to_string(Limits::kMaxNameBytes) + " bytes");
+  }
+  return name;
+}
+
+/// A body-frame position, every coordinate in [-kMaxAbsPositionM, kMaxAbsPositionM].
+template <int N>
+Eigen::Matrix<double, N, 1> ReadPosition(Reader& reader, const std::string& key) {
+  const Eigen::Matrix<double, N, 1> position = reader.Vector<N>(key);
+  for (int i = 0; i < N; ++i) {
+    if (std::abs(position[i]) > Limits::kMaxAbsPositionM) {
+      reader.Fail(reader.Key(key) + "[" + std::to_string(i) + "]",
+                  "must be in [-" + FormatShort(Limits::kMaxAbsPositionM) + ", " + FormatShort(Limits::kMaxAbsPositionM) +
+                      "], got " + FormatShort(position[i]));
+    }
+  }
+  return position;
+}
 
 SensorMount ReadMount(Reader reader) {
   SensorMount mount;
-  mount.name = reader.String("name");
-  mount.position_m = reader.Vector<3>("position_m");
-  mount.yaw_rad = reader.NumberIn("yaw_rad", -std::numbers::pi, std::numbers::pi);
+  mount.name = ReadName(reader, "name");
+  mount.position_m = ReadPosition<3>(reader, "position_m");
+  mount.yaw_rad = NumberIn(reader, "yaw_rad", -std::numbers::pi, std::numbers::pi);
   reader.RejectUnknownKeys();
   return mount;
 }
 
 WheelGeometry ReadWheel(Reader reader) {
   WheelGeometry wheel;
-  wheel.name = reader.String("name");
-  wheel.position_m = ReadVector2(reader, "position_m");
-  wheel.nominal_radius_m = reader.Number("nominal_radius_m");
-  if (wheel.nominal_radius_m <= 0.0) reader.Fail(reader.Key("nominal_radius_m"), "must be > 0");
+  wheel.name = ReadName(reader, "name");
+  wheel.position_m = ReadPosition<2>(reader, "position_m");
+  wheel.nominal_radius_m = NumberIn(reader, "nominal_radius_m", Limits::kMinWheelRadiusM, Limits::kMaxWheelRadiusM);
   wheel.steerable = reader.Bool("steerable");
   reader.RejectUnknownKeys();
   return wheel;
@@ -117,15 +156,17 @@ WheelGeometry ReadWheel(Reader reader) {
 
 TrackParameters ReadTracks(Reader reader) {
   TrackParameters tracks;
-  tracks.contact_length_m = reader.Number("contact_length_m");
-  tracks.turning_resistance_coefficient = reader.Number("turning_resistance_coefficient");
+  tracks.contact_length_m =
+      NumberIn(reader, "contact_length_m", Limits::kMinTrackContactLengthM, Limits::kMaxTrackContactLengthM);
+  tracks.turning_resistance_coefficient =
+      NumberIn(reader, "turning_resistance_coefficient", 0.0, Limits::kMaxTurningResistanceCoefficient);
   reader.RejectUnknownKeys();
   return tracks;
 }
 
 VehicleConfig ReadConfig(Reader& root) {
   VehicleConfig config;
-  config.name = root.String("name");
+  config.name = ReadName(root, "name");
   const std::string kind = root.String("kind");
   const auto parsed_kind = VehicleKindFromName(kind);
   if (!parsed_kind) {
@@ -133,13 +174,13 @@ VehicleConfig ReadConfig(Reader& root) {
                       "\"skid_steer\", got \"" + kind + "\"");
   }
   config.kind = *parsed_kind;
-  config.mass_kg = root.Number("mass_kg");
-  config.max_steering_angle_rad = root.Number("max_steering_angle_rad");
-  config.wheels = root.ObjectArray("wheels", ReadWheel);
+  config.mass_kg = NumberIn(root, "mass_kg", Limits::kMinMassKg, Limits::kMaxMassKg);
+  config.max_steering_angle_rad = NumberIn(root, "max_steering_angle_rad", 0.0, Limits::kMaxSteeringAngleRad);
+  config.wheels = root.ObjectArray("wheels", ReadWheel, 1, Limits::kMaxWheels);
   if (!root.IsNull("tracks")) config.tracks = ReadTracks(root.Object("tracks"));
   config.gnss_antenna = ReadMount(root.Object("gnss_antenna"));
   config.imu = ReadMount(root.Object("imu"));
-  config.ultrasonic = root.ObjectArray("ultrasonic", ReadMount);
+  config.ultrasonic = root.ObjectArray("ultrasonic", ReadMount, 0, Limits::kMaxUltrasonicSensors);
   root.RejectUnknownKeys();
   return config;
 }

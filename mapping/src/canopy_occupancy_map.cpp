@@ -1,6 +1,8 @@
 // Canopy occupancy map through OctoMap (see canopy_occupancy_map.hpp).
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
+
 #include <octomap/OcTree.h>
 
 #include <cmath>
@@ -81,8 +83,14 @@ OctoMapSummary WriteOctoMap(const PointCloud& cloud, const OctoMapOptions& optio
     tree.updateNode(key, /*occupied=*/true);
   }
   // writeBinary() converts to maximum likelihood and prunes before writing.
-  if (!tree.writeBinary(bt_path.string())) {
-    throw OccupancyMapError(bt_path, "OctoMap could not write the file");
+  try {
+    mapio::OutputFile file(bt_path);  // a temporary next to the target, renamed over it on success
+    if (!tree.writeBinary(file.temporary_path().string())) {
+      throw OccupancyMapError(bt_path, "OctoMap could not write the file");
+    }
+    file.Commit();
+  } catch (const mapio::OutputFileError& e) {
+    throw OccupancyMapError(bt_path, e.what());
   }
   const OccupiedExtent extent = MeasureOccupied(tree);
   return OctoMapSummary{extent.voxels, tree.getResolution(), extent.min_m, extent.max_m};

@@ -2,6 +2,7 @@
 #include "rowloc/mapping/map_builder.hpp"
 
 #include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
 #include "rowloc/mapping/cloud_cleaning.hpp"
@@ -33,13 +34,7 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-void WriteText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) throw std::system_error(errno, std::generic_category(), "cannot write " + path.string());
-  out << text;
-  out.flush();
-  if (!out) throw std::system_error(errno, std::generic_category(), "cannot write " + path.string());
-}
+void WriteText(const std::filesystem::path& path, const std::string& text) { mapio::WriteFileAtomically(path, text); }
 
 double Round(double value, double unit) { return std::round(value / unit) * unit; }
 

@@ -1,6 +1,9 @@
 // PLY / PCD reading and writing through PCL (see point_cloud.hpp).
 #include "rowloc/mapping/point_cloud.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
+#include "rowloc/mapping/point_cloud_header.hpp"
+
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/PolygonMesh.h>
 #include <pcl/io/pcd_io.h>
@@ -8,10 +11,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <fstream>
+#include <new>
 #include <optional>
 #include <string_view>
 #include <utility>
@@ -104,8 +110,11 @@ std::vector<Eigen::Vector3d> ExtractPoints(const pcl::PCLPointCloud2& blob,
 
 constexpr const char* kNoPoints = "the file holds no points";
 
-[[noreturn]] void ThrowParseFailure(const std::filesystem::path& path, int status) {
-  throw PointCloudError(path, "PCL could not parse the file (status " + std::to_string(status) + ")");
+/// PCL refused a file whose header passed CheckPcdFile / CheckPlyFile: its own message (printed by
+/// PCL on stderr just before) has the detail; ours says which call and what was checked.
+[[noreturn]] void ThrowParseFailure(const std::filesystem::path& path, const char* call, int status) {
+  throw PointCloudError(path, std::string(call) + " refused the body of the file (status " + std::to_string(status) +
+                                  "; the header's sizes were consistent with the file, see PCL's message above)");
 }
 
 /// PLY through pcl::io::loadPLYFile into a PolygonMesh: unlike the PCLPointCloud2 overload, it
@@ -115,10 +124,12 @@ pcl::PCLPointCloud2 LoadPly(const std::filesystem::path& path) {
   int status = -1;
   try {
     status = pcl::io::loadPLYFile(path.string(), mesh);
+  } catch (const std::bad_alloc&) {
+    throw;  // ReadPointCloud names the point count
   } catch (const std::exception& e) {
     throw PointCloudError(path, std::string("PCL could not parse the file: ") + e.what());
   }
-  if (status < 0) ThrowParseFailure(path, status);
+  if (status < 0) ThrowParseFailure(path, "pcl::io::loadPLYFile", status);
   return std::move(mesh.cloud);
 }
 
@@ -137,7 +148,7 @@ pcl::PCLPointCloud2 LoadPcd(const std::filesystem::path& path) {
     unsigned int data_index = 0;  // offset of the body: 0 if the header has no DATA line
     const int status =
         reader.readHeader(path.string(), header, origin, orientation, version, data_type, data_index);
-    if (status < 0) ThrowParseFailure(path, status);
+    if (status < 0) ThrowParseFailure(path, "pcl::PCDReader::readHeader", status);
     // Without a DATA line PCL reads the header text itself as ASCII points (all zeros).
     if (data_index == 0) throw PointCloudError(path, "PCD header has no DATA line");
     for (const char* axis : {"x", "y", "z"}) RequireCoordinateField(header, axis, path);
@@ -146,10 +157,12 @@ pcl::PCLPointCloud2 LoadPcd(const std::filesystem::path& path) {
     }
     pcl::PCLPointCloud2 blob;
     const int read_status = pcl::io::loadPCDFile(path.string(), blob);
-    if (read_status < 0) ThrowParseFailure(path, read_status);
+    if (read_status < 0) ThrowParseFailure(path, "pcl::io::loadPCDFile", read_status);
     return blob;
   } catch (const PointCloudError&) {
     throw;
+  } catch (const std::bad_alloc&) {
+    throw;  // ReadPointCloud names the point count
   } catch (const std::exception& e) {
     throw PointCloudError(path, std::string("PCL could not parse the file: ") + e.what());
   }
@@ -193,7 +206,17 @@ PointCloud ReadPointCloud(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path, ec)) throw PointCloudError(path, "no such file");
   if (!std::filesystem::is_regular_file(path, ec)) throw PointCloudError(path, "not a regular file");
 
-  const pcl::PCLPointCloud2 blob = format == CloudFormat::kPly ? LoadPly(path) : LoadPcd(path);
+  // The header's claims are checked against the file before PCL sizes its buffers from them.
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw PointCloudError(path, std::string("cannot open: ") + std::strerror(errno));
+  const PointCloudFileSummary summary = format == CloudFormat::kPly ? CheckPlyFile(in, path) : CheckPcdFile(in, path);
+  in.close();
+  pcl::PCLPointCloud2 blob;
+  try {
+    blob = format == CloudFormat::kPly ? LoadPly(path) : LoadPcd(path);
+  } catch (const std::bad_alloc&) {
+    throw PointCloudError(path, "not enough memory to read " + std::to_string(summary.points) + " points");
+  }
   PointCloud cloud{ExtractPoints(blob, path)};
   if (cloud.points_m.empty()) throw PointCloudError(path, kNoPoints);
   RejectNonFinite(cloud.points_m, path);
@@ -208,22 +231,33 @@ void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path)
     throw PointCloudError(path, "too many points for one PCL cloud");
   }
   const pcl::PCLPointCloud2 blob = ToBlob(cloud.points_m);
+  std::optional<mapio::OutputFile> file;  // a temporary next to the target, renamed over it on success
+  try {
+    file.emplace(path);
+  } catch (const mapio::OutputFileError& e) {
+    throw PointCloudError(path, e.what());
+  }
+  const std::string temporary = file->temporary_path().string();
   int status = -1;
   try {
     if (format == CloudFormat::kPly) {
       pcl::PLYWriter writer;
-      status = writer.writeBinary(path.string(), blob, Eigen::Vector4f::Zero(),
-                                  Eigen::Quaternionf::Identity(), /*use_camera=*/false);
+      status = writer.writeBinary(temporary, blob, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(),
+                                  /*use_camera=*/false);
     } else {
       pcl::PCDWriter writer;
-      status = writer.writeBinary(path.string(), blob);
+      status = writer.writeBinary(temporary, blob);
     }
   } catch (const std::exception& e) {
     throw PointCloudError(path, std::string("PCL could not write the file: ") + e.what());
   }
   if (status < 0) {
-    throw PointCloudError(path, "PCL could not write the file (status " + std::to_string(status) +
-                                    ")");
+    throw PointCloudError(path, "PCL could not write the file (status " + std::to_string(status) + ")");
+  }
+  try {
+    file->Commit();
+  } catch (const mapio::OutputFileError& e) {
+    throw PointCloudError(path, e.what());
   }
 }
 

@@ -246,6 +246,8 @@ std::shared_ptr<ServiceSession> Dispatcher::FindSession(const std::string& name)
   return it == sessions_.end() ? nullptr : it->second;  // null while being opened
 }
 
+bool Dispatcher::TokenMatches(std::string_view given) const { return token_.empty() || SameToken(std::string(given), token_); }
+
 std::shared_ptr<ServiceSession> Dispatcher::Session(const Json& request) const {
   const std::string name = RequiredString(request, "session");
   std::shared_ptr<ServiceSession> session = FindSession(name);
@@ -582,11 +584,13 @@ Dispatcher::OrderedJson Dispatcher::CloseSession(const Json& request) {
 void Dispatcher::Subscribe(ClientContext& client, const Json& request, const Json& id) {
   const std::shared_ptr<ServiceSession> session = Session(request);
   const std::string stream = OptionalString(request, "stream").value_or("state");
-  if (stream != "state" && stream != "estimates") {
-    Fail(ErrorCode::kInvalidField, "stream: must be \"state\" or \"estimates\", got '" + stream + "'");
+  if (stream != "state" && stream != "estimates" && stream != "live") {
+    Fail(ErrorCode::kInvalidField, "stream: must be \"state\", \"estimates\" or \"live\", got '" + stream + "'");
   }
   const double rate_hz = OptionalNumber(request, "rate_hz", 0.0, 0.0, 1e6);
-  session->Subscribe(client.sink, stream == "state" ? StreamKind::kState : StreamKind::kEstimates, rate_hz,
+  const StreamKind kind =
+      stream == "state" ? StreamKind::kState : (stream == "live" ? StreamKind::kLive : StreamKind::kEstimates);
+  session->Subscribe(client.sink, kind, rate_hz,
                      [&](std::size_t subscribers) {
                        return OrderedJson{{"type", "subscribed"}, {"id", id},
                                           {"session", session->name()}, {"stream", stream},

@@ -2,6 +2,7 @@
 #include "rowloc/service/server.hpp"
 
 #include "rowloc/service/line_framer.hpp"
+#include "rowloc/service/live_view.hpp"
 
 #include <boost/asio.hpp>
 #include <boost/asio/awaitable.hpp>
@@ -259,7 +260,13 @@ class Server::Impl {
       if (ec) throw std::runtime_error("cannot listen on " + settings_.unix_socket + ": " + ec.message());
       unix_->listen();
     }
+    if (settings_.http_port >= 0) {
+      live_.emplace(dispatcher_, io_);
+      live_->Listen();
+    }
   }
+
+  std::string live_view_url() const { return live_ ? live_->url() : ""; }
 
   std::string tcp_endpoint() const {
     const tcp::endpoint e = tcp_->local_endpoint();
@@ -268,10 +275,16 @@ class Server::Impl {
 
   std::string unix_socket() const { return settings_.unix_socket; }
 
+  void CatchSignals() {
+    if (catching_signals_) return;
+    signals_.add(SIGINT);
+    signals_.add(SIGTERM);
+    catching_signals_ = true;
+  }
+
   void Run(bool handle_signals) {
     if (handle_signals) {
-      signals_.add(SIGINT);
-      signals_.add(SIGTERM);
+      CatchSignals();
       signals_.async_wait([this](const boost::system::error_code& ec, int signal) {
         if (ec) return;
         spdlog::info("signal {}: stopping", signal);
@@ -280,6 +293,7 @@ class Server::Impl {
     }
     asio::co_spawn(io_, Accept(*tcp_), asio::detached);
     if (unix_) asio::co_spawn(io_, Accept(*unix_), asio::detached);
+    if (live_) live_->Start();
     ScheduleTick();
     std::vector<std::thread> threads;
     for (int i = 1; i < settings_.threads; ++i) threads.emplace_back([this] { io_.run(); });
@@ -294,6 +308,7 @@ class Server::Impl {
       boost::system::error_code ignored;
       if (tcp_) tcp_->close(ignored);
       if (unix_) unix_->close(ignored);
+      if (live_) live_->Stop();
       dispatcher_.Shutdown();
       for (const auto& connection : Connections()) {
         connection->Push(R"({"type":"shutdown","message":"the server is stopping; sessions resume from their journals"})",
@@ -402,10 +417,12 @@ class Server::Impl {
   asio::steady_timer tick_;
   std::optional<tcp::acceptor> tcp_;
   std::optional<unix_socket::acceptor> unix_;
+  std::optional<LiveView> live_;  ///< with an http_port; destroyed before io_
   std::mutex connections_mutex_;
   std::list<std::weak_ptr<ConnectionBase>> connections_;
   std::atomic<std::uint64_t> next_id_{0};
   std::atomic<bool> stopping_{false};
+  bool catching_signals_ = false;
 };
 
 Server::Server(Dispatcher& dispatcher) : impl_(std::make_unique<Impl>(dispatcher)) {}
@@ -413,6 +430,8 @@ Server::~Server() = default;
 void Server::Listen() { impl_->Listen(); }
 std::string Server::tcp_endpoint() const { return impl_->tcp_endpoint(); }
 std::string Server::unix_socket() const { return impl_->unix_socket(); }
+std::string Server::live_view_url() const { return impl_->live_view_url(); }
+void Server::CatchSignals() { impl_->CatchSignals(); }
 void Server::Run(bool handle_signals) { impl_->Run(handle_signals); }
 void Server::Stop() { impl_->Stop(); }
 

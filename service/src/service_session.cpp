@@ -4,6 +4,7 @@
 #include "rowloc/formats/estimate_stream_writer.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/service/live_observations.hpp"
 #include "rowloc/service/service_error.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -182,7 +183,7 @@ void ServiceSession::ProcessReleased(formats::SensorMessage message, std::vector
                     std::string(formats::TypeOf(message)) + ": " + *step.error;
     refusals.push_back(*last_refusal_);
   }
-  if (!subscribers_.empty()) Publish(step);
+  if (!subscribers_.empty()) Publish(message, step);
 }
 
 void ServiceSession::FlushJournal(bool sync) {
@@ -214,9 +215,10 @@ std::vector<std::string> ServiceSession::EstimateLines(const localization::Sessi
   return lines;
 }
 
-void ServiceSession::Publish(const localization::SessionStep& step) {
+void ServiceSession::Publish(const formats::SensorMessage& message, const localization::SessionStep& step) {
   std::vector<std::string> estimate_lines;
   if (estimate_subscribers_ > 0) estimate_lines = EstimateLines(step);
+  std::optional<std::vector<std::string>> observation_lines;  // made once, for the first live subscriber
   std::optional<std::string> state_line;
   const double t = session_.filter().time_s();
   for (auto it = subscribers_.begin(); it != subscribers_.end();) {
@@ -228,7 +230,16 @@ void ServiceSession::Publish(const localization::SessionStep& step) {
     }
     if (it->stream == StreamKind::kEstimates) {
       for (const std::string& line : estimate_lines) sink->Push(line, true);
-    } else if (step.changed_state && (it->period_s == 0.0 || !(t < it->last_push_t_s + it->period_s))) {
+      ++it;
+      continue;
+    }
+    if (it->stream == StreamKind::kLive) {
+      if (!observation_lines) {
+        observation_lines = LiveObservationLines(message, step, session_.filter(), frame_, OrderedJson(spec_.name).dump());
+      }
+      for (const std::string& line : *observation_lines) sink->Push(line, true);
+    }
+    if (step.changed_state && (it->period_s == 0.0 || !(t < it->last_push_t_s + it->period_s))) {
       if (!state_line) {
         OrderedJson state{{"type", "state"}};
         state.update(StateLocked());

@@ -69,6 +69,20 @@ const std::map<std::string, Setter>& Setters() {
          if (!v.is_number_integer()) Bad(key, "must be a whole number");
          s.port = static_cast<int>(std::clamp<std::int64_t>(v.get<std::int64_t>(), -1, 65536));
        }},
+      {"http_port",
+       [](ServiceSettings& s, const Json& v, const std::string& key) {
+         if (v.is_null()) {
+           s.http_port = -1;  // off
+           return;
+         }
+         if (!v.is_number_integer()) Bad(key, "must be a whole number (-1 or null: no live view)");
+         s.http_port = static_cast<int>(std::clamp<std::int64_t>(v.get<std::int64_t>(), -2, 65536));
+       }},
+      {"live_view_rate_hz",
+       [](ServiceSettings& s, const Json& v, const std::string& key) {
+         if (!v.is_number()) Bad(key, "must be a number (frames per second)");
+         s.live_view_rate_hz = v.get<double>();
+       }},
       {"unix_socket", String(&ServiceSettings::unix_socket)},
       {"token_file", String(&ServiceSettings::token_file)},
       {"vehicles_dir", Path(&ServiceSettings::vehicles_dir)},
@@ -149,6 +163,9 @@ bool IsLoopbackAddress(const std::string& address) {
 
 void ValidateServiceSettings(const ServiceSettings& s) {
   CheckRange(s.port >= 0 && s.port <= 65535, "port", "in [0, 65535]");
+  CheckRange(s.http_port >= -1 && s.http_port <= 65535, "http_port", "in [0, 65535], or -1: no live view");
+  CheckRange(std::isfinite(s.live_view_rate_hz) && s.live_view_rate_hz > 0 && s.live_view_rate_hz <= 1000,
+             "live_view_rate_hz", "in (0, 1000] Hz");
   CheckRange(s.threads >= 1 && s.threads <= 64, "threads", "in [1, 64]");
   CheckRange(s.max_line_bytes >= 256 && s.max_line_bytes <= (std::size_t{64} << 20), "max_line_bytes",
              "in [256, 64 MiB]");

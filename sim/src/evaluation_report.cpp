@@ -1,6 +1,8 @@
 // Text and JSON evaluation reports (see evaluation_report.hpp).
 #include "rowloc/sim/evaluation_report.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -248,12 +250,8 @@ json DriftJson(const std::vector<DriftInterval>& drift) {
   return out;
 }
 
-void WriteFile(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": cannot write file");
-}
+/// Checked and atomic (mapio::OutputFile: never over an input, a device or a directory).
+void WriteFile(const std::filesystem::path& path, const std::string& text) { mapio::WriteFileAtomically(path, text); }
 
 }  // namespace
 

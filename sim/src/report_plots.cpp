@@ -1,6 +1,8 @@
 // Plot data files and the gnuplot script of an evaluation (see report_plots.hpp).
 #include "rowloc/sim/report_plots.hpp"
 
+#include "rowloc/mapio/output_file.hpp"
+
 #include <Eigen/Cholesky>
 
 #include <algorithm>
@@ -27,12 +29,8 @@ std::string Val(double v) {
 }
 std::string Val(const std::optional<double>& v, double scale = 1.0) { return v ? Val(*v * scale) : "?"; }
 
-void WriteText(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) throw std::runtime_error(path.string() + ": cannot write file");
-}
+/// Checked and atomic (mapio::OutputFile: never over an input, a device or a directory).
+void WriteText(const std::filesystem::path& path, const std::string& text) { mapio::WriteFileAtomically(path, text); }
 
 /// A gnuplot single-quoted string literal: a quote is doubled inside single quotes, and control
 /// characters (a newline would end the command and start another) become spaces.

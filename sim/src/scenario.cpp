@@ -236,6 +236,12 @@ Scenario ParseScenarioObject(Reader reader, const std::filesystem::path& base) {
   scenario.row_map_height_m = reader.NumberIn("row_map_height_m", 0.0, 100.0);
   ReadSensors(reader.Object("sensors"), profiles, scenario);
   scenario.filter_files = ReadFilterFiles(reader, base);
+  if (reader.Has("faults")) {
+    const std::string faults_text = reader.Value("faults").dump();
+    std::vector<std::string> wheels;
+    for (const auto& w : scenario.vehicle.wheels) wheels.push_back(w.name);
+    scenario.faults = Inline([&] { return ParseSensorFaults(faults_text, reader.source(), "faults", wheels); });
+  }
   reader.RejectUnknownKeys();
   return scenario;
 }

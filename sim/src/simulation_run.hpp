@@ -83,6 +83,10 @@ class SimulationRun {
   std::optional<double> previous_wheel_time_s_;
   std::vector<double> previous_wheel_rate_radps_;
   std::vector<double> steering_readings_rad_;
+  // Injected faults (scenario_.faults, sensor_faults.hpp).
+  std::size_t next_gnss_outlier_ = 0;                   ///< the next outlier not yet applied
+  std::vector<std::optional<double>> dead_wheel_angle_;  ///< per wheel: the frozen angle of a dead encoder
+  std::vector<std::optional<double>> stuck_range_m_;     ///< per ranger: the range it repeats
   GnssFaultState gnss_faults_;
   bool gnss_fix_ = false;
   ImuTruth imu_bias_;

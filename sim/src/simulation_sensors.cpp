@@ -27,18 +27,24 @@ void SimulationRun::SampleGnss(double time_s) {
   const SensorMount& antenna = scenario_.vehicle.gnss_antenna;
   const Eigen::Vector3d position = truth_.WorldPoint(truth, antenna.position_m);
   const double cover = cover_ ? cover_->At(position.head<2>(), antenna.position_m.z(), truth.route.heading_rad) : 0.0;
-  const GnssSample sample = gnss_->Measure(time_s, position, cover);
+  GnssSample sample = gnss_->Measure(time_s, position, cover);
+  const auto& outliers = scenario_.faults.gnss_outliers;
+  std::optional<double> outlier_altitude_m;  // an outlier keeps the fix's altitude (a receiver's fault)
+  if (sample.has_fix && next_gnss_outlier_ < outliers.size() && time_s >= outliers[next_gnss_outlier_].time_s) {
+    outlier_altitude_m = frame_.ToGeodetic(sample.position_m).altitude_m;
+    sample.position_m.head<2>() += outliers[next_gnss_outlier_++].offset_m;  // injected fault
+  }
   gnss_faults_ = sample.faults;
   gnss_fix_ = sample.has_fix;
   GpsMessage message;
-  message.time_s = time_s;
+  message.time_s = scenario_.faults.Stamp(time_s);
   message.sensor = antenna.name;
   message.fix = sample.has_fix ? sample.fix : formats::GnssFixQuality::kNone;
   if (sample.has_fix) {
     const geometry::GeoOrigin geodetic = frame_.ToGeodetic(sample.position_m);
     message.latitude_deg = geodetic.latitude_deg;
     message.longitude_deg = geodetic.longitude_deg;
-    message.altitude_m = geodetic.altitude_m;
+    message.altitude_m = outlier_altitude_m.value_or(geodetic.altitude_m);
     message.sigma_horizontal_m = sample.sigma_horizontal_m;
     message.sigma_vertical_m = sample.sigma_vertical_m;
     ++summary_.gps_fixes;
@@ -55,16 +61,19 @@ void SimulationRun::SampleGnss(double time_s) {
                                                   : Eigen::Vector2d::Zero();
     const Eigen::Matrix3d covariance = Eigen::Vector3d(variance, variance, 0.0).asDiagonal().toDenseMatrix();
     gnss_baseline_->Write(
-        formats::EstimateRecord{time_s, sample.position_m.head<2>() - lever, std::nullopt, covariance, {}, {}});
+        formats::EstimateRecord{time_s, sample.position_m.head<2>() - lever, std::nullopt, covariance, {}, {}, {}});
   }
 }
 
 void SimulationRun::SampleImu(double time_s) {
   const VehicleTruth& truth = TruthAt(time_s);
   const Eigen::Vector2d force = truth_.SpecificForce(truth, scenario_.vehicle.imu.position_m.head<2>());
-  const ImuSample sample = imu_->Measure(time_s, ImuTruth{force.x(), force.y(), truth.motion.yaw_rate_radps});
+  ImuSample sample = imu_->Measure(time_s, ImuTruth{force.x(), force.y(), truth.motion.yaw_rate_radps});
   imu_bias_ = sample.bias;
-  sensor_log_->Write(ImuMessage{time_s, scenario_.vehicle.imu.name, sample.accel_x_mps2, sample.accel_y_mps2,
+  if (scenario_.faults.imu_dead_after_s && time_s >= *scenario_.faults.imu_dead_after_s) {
+    sample.accel_x_mps2 = sample.accel_y_mps2 = sample.gyro_z_radps = 0.0;  // injected fault: a dead IMU
+  }
+  sensor_log_->Write(ImuMessage{scenario_.faults.Stamp(time_s), scenario_.vehicle.imu.name, sample.accel_x_mps2, sample.accel_y_mps2,
                                 sample.gyro_z_radps});
   ++summary_.imu;
   if (dead_reckoning_) dead_reckoning_->SetYawRate(time_s, sample.gyro_z_radps);
@@ -72,7 +81,7 @@ void SimulationRun::SampleImu(double time_s) {
 
 void SimulationRun::SampleSteering(double time_s) {
   const VehicleTruth& truth = TruthAt(time_s);
-  SteeringMessage message{time_s, {}};
+  SteeringMessage message{scenario_.faults.Stamp(time_s), {}};
   for (std::size_t i = 0; i < steering_encoders_.size(); ++i) {
     if (!steering_encoders_[i]) continue;
     const double angle = steering_encoders_[i]->Measure(time_s, truth.wheels[i].steering_angle_rad).angle_rad;
@@ -97,13 +106,20 @@ void SimulationRun::SampleWheels(double time_s) {
   if (previous_wheel_time_s_) {
     for (std::size_t i = 0; i < n; ++i) mean_rate[i] = (mean_rate[i] + truth.wheels[i].wheel_angular_speed_radps) / 6.0;
   }
-  WheelsMessage message{time_s, {}, {}, {}};
+  WheelsMessage message{scenario_.faults.Stamp(time_s), {}, {}, {}};
+  dead_wheel_angle_.resize(n);
   std::vector<double> readings(n);
   const double torque_sigma = scenario_.torque ? scenario_.torque->noise_sigma_nm : 0.0;
   std::normal_distribution<double> unit_normal;  // std::normal_distribution needs sigma > 0: scaled here
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& name = scenario_.vehicle.wheels[i].name;
-    const WheelEncoderSample sample = wheel_encoders_[i].Measure(time_s, mean_rate[i]);
+    WheelEncoderSample sample = wheel_encoders_[i].Measure(time_s, mean_rate[i]);
+    for (const WheelEncoderDeadFault& dead : scenario_.faults.wheel_encoders_dead) {
+      if (dead.wheel != name || time_s < dead.after_s) continue;  // injected fault: a dead encoder
+      if (!dead_wheel_angle_[i]) dead_wheel_angle_[i] = sample.cumulative_angle_rad;
+      sample.speed_radps = 0.0;
+      sample.cumulative_angle_rad = *dead_wheel_angle_[i];
+    }
     readings[i] = sample.speed_radps;
     message.speed_radps.emplace_back(name, readings[i]);
     message.angle_rad.emplace_back(name, sample.cumulative_angle_rad);
@@ -118,7 +134,7 @@ void SimulationRun::SampleWheels(double time_s) {
   if (dead_reckoning_) {
     const PlanarPose pose = dead_reckoning_->AddWheelSpeeds(time_s, readings);
     odometry_baseline_->Write(
-        formats::EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}, {}});
+        formats::EstimateRecord{time_s, pose.position_m, pose.heading_rad, std::nullopt, {}, {}, {}});
   }
 }
 
@@ -128,7 +144,7 @@ void SimulationRun::SampleVio(double time_s) {
   std::normal_distribution<double> unit_normal;
   const double vx = velocity.x() + scenario_.vio->sigma_mps * unit_normal(vio_rng_);
   const double vy = velocity.y() + scenario_.vio->sigma_mps * unit_normal(vio_rng_);
-  sensor_log_->Write(VioMessage{time_s, "camera", vx, vy, scenario_.vio->sigma_mps});
+  sensor_log_->Write(VioMessage{scenario_.faults.Stamp(time_s), "camera", vx, vy, scenario_.vio->sigma_mps});
   ++summary_.vio;
 }
 
@@ -139,9 +155,14 @@ void SimulationRun::SampleUltrasonic(std::size_t sensor, double time_s) {
   const auto reading = ultrasonic_[sensor].Measure(*caster_, apex.head<2>(),
                                                    VehicleTruthSampler::WorldDirection(truth, mount.yaw_rad),
                                                    mount.position_m.z());
-  UltrasonicMessage message{time_s, mount.name, std::nullopt};
-  if (reading) {
+  UltrasonicMessage message{scenario_.faults.Stamp(time_s), mount.name, std::nullopt};
+  stuck_range_m_.resize(scenario_.ultrasonic->mounts.size());
+  const auto& stuck_after = scenario_.faults.ultrasonic_stuck_after_s;
+  if (stuck_after && time_s >= *stuck_after && stuck_range_m_[sensor]) {
+    message.range_m = stuck_range_m_[sensor];  // injected fault: the ranger repeats its last range
+  } else if (reading) {
     message.range_m = reading->range_m;
+    stuck_range_m_[sensor] = reading->range_m;
     ++summary_.ultrasonic_echoes;
   } else {
     ++summary_.ultrasonic_no_echo;

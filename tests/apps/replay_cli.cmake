@@ -36,9 +36,9 @@ set_tests_properties(apps.replay_is_deterministic apps.replay_output_evaluates
 rowloc_cli_test(replay_reports_rejected_input ON
                 "out-of-range.ndjson:9: rejected: wheels at t=0.02 s: .speed_radps. above.*1 rejected inputs"
                 replay ${_logs}/agrimaro-tiles-out-of-range.ndjson --vehicle ${_swerve} -o ${_replay_out}/range.ndjson)
-rowloc_cli_test(replay_rejects_missing_log OFF "no-such-log.ndjson: cannot open sensor log"
+rowloc_cli_test(replay_rejects_missing_log OFF "log .no-such-log.ndjson.: no such file"
                 replay no-such-log.ndjson --vehicle ${_swerve} -o ${_replay_out}/missing.ndjson)
-rowloc_cli_test(replay_rejects_missing_vehicle OFF "no-such-vehicle.json: cannot open vehicle file"
+rowloc_cli_test(replay_rejects_missing_vehicle OFF "--vehicle .no-such-vehicle.json.: no such file"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle no-such-vehicle.json -o ${_replay_out}/x.ndjson)
 rowloc_cli_test(replay_rejects_bad_filter OFF "bad-gate.json: gps.gate_probability must be in \\(0, 1\\)"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
@@ -99,7 +99,7 @@ rowloc_cli_reproducible_test(replay_smoothed_is_deterministic ${_replay_out}/til
                              -o ${_replay_out}/tiles-filtered-2.ndjson --smoothed ${_replay_out}/tiles-smoothed-2.ndjson)
 set_tests_properties(apps.replay_smoothed_stream_evaluates apps.replay_smoothed_is_deterministic
                      PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_smoothed")
-rowloc_cli_test(replay_rejects_smoothed_over_output OFF "--smoothed: the same file as --output"
+rowloc_cli_test(replay_rejects_smoothed_over_output OFF "--smoothed .*x.ndjson. is the same file as --output .*: two outputs cannot share a file"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
                 -o ${_replay_out}/x.ndjson --smoothed ${_replay_out}/x.ndjson)
 # --calibration: the wheel calibration of a previous drive (the smoothed tiles run above) as the prior;
@@ -119,3 +119,22 @@ rowloc_cli_test(replay_rejects_a_calibration_without_slip_states OFF "no slip-aw
                 --calibration ${_replay_out}/tiles-smoothed.ndjson -o ${_replay_out}/x.ndjson)
 set_tests_properties(apps.replay_rejects_a_calibration_without_slip_states
                      PROPERTIES FIXTURES_REQUIRED "simulate_tiles;replay_smoothed")
+# Issue 26 (engineer "filter"): a torque of 1e308 once aborted the replay with no line or key; the
+# log reader now refuses 1e308 itself, and a torque the reader accepts but no sensor produces (5e5 N m)
+# is rejected by the filter with its line and key, and the run goes on. Filter values outside their physical
+# range (a prediction step of 1e-300 s hung the filter; a sigma of 1e300 overflowed it) are refused
+# at load with the key and the range in short numbers.
+rowloc_cli_test(replay_rejects_huge_torque_by_line_and_key ON
+                "huge-torque.ndjson:9: rejected: wheels at t=0.02 s: wheels.torque_nm.right = 500000 is outside \\[-100000, 100000\\].*1 rejected inputs"
+                replay ${_logs}/agrimaro-tiles-huge-torque.ndjson --vehicle ${_swerve} -o ${_replay_out}/torque.ndjson)
+rowloc_cli_test(replay_skips_a_line_the_reader_refuses ON
+                "torque-1e308.ndjson:9: rejected: torque_nm.right: .*1 rejected inputs.*wrote"
+                replay ${_logs}/agrimaro-tiles-torque-1e308.ndjson --vehicle ${_swerve} -o ${_replay_out}/torque-1e308.ndjson)
+rowloc_cli_test(replay_rejects_tiny_prediction_step OFF
+                "tiny-step.json: max_prediction_step_s must be in \\[0.0001, 1\\], got 1e-300"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/tiny-step.json -o ${_replay_out}/x.ndjson)
+rowloc_cli_test(replay_rejects_huge_sigma OFF
+                "huge-sigma.json: imu.gyro_sigma_radps must be in \\[1e-09, 100\\], got 1e\\+300"
+                replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
+                --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/huge-sigma.json -o ${_replay_out}/x.ndjson)

@@ -1,12 +1,26 @@
 # Runs a command-line program and checks its exit status and output.
 #   cmake -DCOMMAND="prog;arg;..." -DEXPECT_SUCCESS=ON|OFF [-DEXPECT_OUTPUT=regex]
-#         [-DCOMPARE_FILES="a;b"] -P run_cli.cmake
+#         [-DCOMPARE_FILES="a;b"] [-DEXPECT_STATUS=n] [-DEXPECT_STDOUT=regex] [-DEXPECT_STDERR=regex]
+#         [-DEXPECT_EMPTY_STDOUT=ON] -P run_cli.cmake
+# EXPECT_STATUS checks the exact exit status; EXPECT_STDOUT / EXPECT_STDERR match one stream only.
 execute_process(COMMAND ${COMMAND} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
 message("${out}${err}")
 if(EXPECT_SUCCESS AND NOT status EQUAL 0)
   message(FATAL_ERROR "expected success, exit status ${status}")
 elseif(NOT EXPECT_SUCCESS AND status EQUAL 0)
   message(FATAL_ERROR "expected a failure, got exit status 0")
+endif()
+if(DEFINED EXPECT_STATUS AND NOT status EQUAL EXPECT_STATUS)
+  message(FATAL_ERROR "expected exit status ${EXPECT_STATUS}, got ${status}")
+endif()
+if(DEFINED EXPECT_STDOUT AND NOT "${out}" MATCHES "${EXPECT_STDOUT}")
+  message(FATAL_ERROR "stdout does not match: ${EXPECT_STDOUT}")
+endif()
+if(DEFINED EXPECT_STDERR AND NOT "${err}" MATCHES "${EXPECT_STDERR}")
+  message(FATAL_ERROR "stderr does not match: ${EXPECT_STDERR}")
+endif()
+if(EXPECT_EMPTY_STDOUT AND NOT "${out}" STREQUAL "")
+  message(FATAL_ERROR "expected nothing on stdout (logs belong on stderr)")
 endif()
 if(DEFINED EXPECT_OUTPUT AND NOT "${out}${err}" MATCHES "${EXPECT_OUTPUT}")
   message(FATAL_ERROR "output does not match: ${EXPECT_OUTPUT}")

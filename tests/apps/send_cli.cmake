@@ -14,7 +14,7 @@ function(rowloc_send_test name)
 endfunction()
 
 rowloc_send_test(send_equals_replay equals-replay)
-rowloc_send_test(send_rejects_missing_log expect 2 "no-such-log\\.ndjson: cannot open sensor log"
+rowloc_send_test(send_rejects_missing_log expect 2 "log .no-such-log\\.ndjson.: no such file"
                  send no-such-log.ndjson --to @SERVER@ --vehicle vineyard-ugv-4ws -o @WORK@/x.ndjson)
 # Port 1 on the loopback: nothing listens there.
 rowloc_send_test(send_rejects_unreachable_service expect 2 "send: cannot connect to 127\\.0\\.0\\.1:1: "

@@ -5,7 +5,7 @@ rowloc_cli_test(simulate_runs_open_field ON "20\\.0 s simulated \\(15\\.0 m\\).*
                 simulate ${_sim_scenarios}/agrimaro-tiles.json -o ${_sim_out}/tiles-a)
 rowloc_cli_test(simulate_runs_vineyard ON "true row map at 1 m.*ultrasonic [0-9]+ echoes"
                 simulate ${_sim_scenarios}/vineyard-002-1us.json -o ${_sim_out}/vineyard --no-baselines)
-rowloc_cli_test(simulate_rejects_missing_scenario OFF "no-such-scenario.json: cannot open scenario file"
+rowloc_cli_test(simulate_rejects_missing_scenario OFF "scenario .no-such-scenario.json.: no such file"
                 simulate no-such-scenario.json -o ${_sim_out}/missing)
 rowloc_cli_test(simulate_rejects_bad_seed OFF "seed"
                 simulate ${_sim_scenarios}/agrimaro-tiles.json -o ${_sim_out}/bad-seed --seed -3)

@@ -171,3 +171,44 @@ TEST(EstimateLogWriter, RefusesBadUpdatesAndSlipAndWritesNothingForThem) {
 
 }  // namespace
 }  // namespace rowloc::formats
+
+namespace rowloc::formats {
+namespace {
+
+// Issue 26: the estimates name the sensors the filter distrusts (docs/protocol.md §3, sensor_health),
+// an optional key the stream's reader skips; a bad state or name is refused, nothing written.
+TEST(EstimateLogWriter, SensorHealthIsWrittenPerSensorAndReadersKeepWorking) {
+  std::ostringstream out;
+  EstimateLogWriter writer(out, "test", "diff", geometry::GeoOrigin{});
+  EstimateRecord r;
+  r.time_s = 1.0;
+  r.heading_rad = 0.1;
+  writer.Write(r);  // all sensors ok: no key
+  r.time_s = 2.0;
+  r.sensor_health = {{"imu", "excluded", "readings identical", 10, 2, 300, 0}, {"gnss", "suspect", "12 of 20 gated", 8, 12, 0, 1}};
+  writer.Write(r);
+  const std::vector<json> lines = Lines(out.str());
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_FALSE(lines[1].contains("sensor_health"));
+  const json& health = lines[2]["sensor_health"];
+  EXPECT_EQ(health["imu"]["state"], "excluded");
+  EXPECT_EQ(health["imu"]["reason"], "readings identical");
+  EXPECT_EQ(health["imu"]["skipped"], 300);
+  EXPECT_EQ(health["gnss"]["gated"], 12);
+  EXPECT_EQ(health["gnss"]["refused"], 1);
+  std::istringstream in(out.str());
+  const EstimateStream stream = ParseEstimateStream(in, "health");
+  EXPECT_EQ(stream.estimates.size(), 2u);
+  const std::string before = out.str();
+  r.time_s = 3.0;
+  r.sensor_health = {{"imu", "broken", "", 0, 0, 0, 0}};
+  EXPECT_THROW(writer.Write(r), std::invalid_argument);
+  r.sensor_health = {{"imu", "ok", "", 0, 0, 0, 0}, {"imu", "ok", "", 0, 0, 0, 0}};
+  EXPECT_THROW(writer.Write(r), std::invalid_argument);
+  r.sensor_health = {{"", "ok", "", 0, 0, 0, 0}};
+  EXPECT_THROW(writer.Write(r), std::invalid_argument);
+  EXPECT_EQ(out.str(), before);
+}
+
+}  // namespace
+}  // namespace rowloc::formats

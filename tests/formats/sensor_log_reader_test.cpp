@@ -303,6 +303,28 @@ TEST(SensorLogReaderErrors, ValueOutOfItsRange) {
             "test.ndjson:2: fix: unknown fix quality \"dgps\" (none, sbas, rtk_float or rtk_fixed)");
 }
 
+TEST(SensorLogReaderErrors, ValuesNoSensorCanProduceNameTheirKey) {
+  // Issue 26: a torque of 1e308, an altitude of 1e308 or sigmas of 1e300 aborted a replay without a
+  // line or key. They are finite JSON numbers; the reader refuses them with their key.
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":1},)"
+                         R"("torque_nm":{"left":1e308,"right":1}})"})),
+            "test.ndjson:2: torque_nm.left: 1e+308 is not in [-1e+06, 1e+06]");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"gps","t":1,"sensor":"gnss","fix":"sbas","latitude_deg":45,)"
+                         R"("longitude_deg":7,"altitude_m":1e308,"sigma_horizontal_m":1,"sigma_vertical_m":1})"})),
+            "test.ndjson:2: altitude_m: 1e+308 is not in [-1e+05, 1e+05]");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"gps","t":1,"sensor":"gnss","fix":"sbas","latitude_deg":45,)"
+                         R"("longitude_deg":7,"altitude_m":1,"sigma_horizontal_m":1e300,"sigma_vertical_m":1})"})),
+            "test.ndjson:2: sigma_horizontal_m: 1e+300 is not in (0, 1e+06]");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"imu","t":1,"sensor":"imu","accel_x_mps2":0,"accel_y_mps2":-1e200,)"
+                         R"("gyro_z_radps":0})"})),
+            "test.ndjson:2: accel_y_mps2: -1e+200 is not in [-1000, 1000]");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"vio","t":1,"sensor":"cam","velocity_x_mps":1,"velocity_y_mps":0,)"
+                         R"("sigma_mps":1e9})"})),
+            "test.ndjson:2: sigma_mps: 1e+09 is not in (0, 1000]");
+  EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":"fast"}})"})),
+            "test.ndjson:2: speed_radps.right: must be a number, got string");
+}
+
 TEST(SensorLogReaderErrors, UnknownWheelOrSensor) {
   EXPECT_EQ(ErrorOf(Log({R"({"type":"wheels","t":1,"speed_radps":{"left":1,"right":1,"middle":1}})"})),
             "test.ndjson:2: speed_radps.middle: unknown wheel (the log header lists left, right)");
@@ -353,7 +375,92 @@ TEST(SensorLogReaderErrors, UnterminatedOrOverlongLine) {
   EXPECT_EQ(ErrorOf(kHeader + "\n" + kWheels), "test.ndjson:2: line: not terminated by a newline (a truncated log?)");
   const std::string padding(kMaxLogLineBytes, ' ');
   EXPECT_EQ(ErrorOf(Log({kWheels + padding})),
-            "test.ndjson:2: line: longer than " + std::to_string(kMaxLogLineBytes) + " bytes (the protocol's limit)");
+            "test.ndjson:2: line: longer than 1 MiB (1048576 bytes, the protocol's limit)");
+  // At the limit exactly (with or without "\r") the line is read.
+  const std::string at_limit = kWheels + std::string(kMaxLogLineBytes - kWheels.size(), ' ');
+  EXPECT_EQ(ReadText(Log({at_limit})).messages.size(), 1u);
+  EXPECT_EQ(ReadText(Log({at_limit + "\r"})).messages.size(), 1u);
+  // Lines that end at or around the reader's internal block size (16 KiB) are read whole.
+  for (const std::size_t size : {std::size_t{16382}, std::size_t{16383}, std::size_t{16384}, std::size_t{32767}}) {
+    const ReadLog log = ReadText(Log({kWheels + std::string(size - kWheels.size(), ' '), kWheels}));
+    EXPECT_EQ(log.messages.size(), 2u) << size;
+  }
+}
+
+/// A stream of `size` bytes of `fill` (then its end) that counts the bytes it has handed out: an
+/// endless or huge line without a reader holding it all.
+class CountingFillBuffer : public std::streambuf {
+ public:
+  CountingFillBuffer(std::string prefix, char fill, std::size_t size)
+      : prefix_(std::move(prefix)), fill_(fill), size_(size), block_(1 << 16, fill) {}
+  std::size_t handed_out() const { return handed_out_; }
+
+ protected:
+  int_type underflow() override {
+    if (handed_out_ >= size_) return traits_type::eof();
+    std::string& block = handed_out_ < prefix_.size() ? prefix_ : block_;
+    const std::size_t n = std::min(block.size(), size_ - handed_out_);
+    setg(block.data(), block.data(), block.data() + n);
+    handed_out_ += n;
+    return traits_type::to_int_type(block[0]);
+  }
+
+ private:
+  std::string prefix_;
+  char fill_;
+  std::size_t size_;
+  std::string block_;
+  std::size_t handed_out_ = 0;
+};
+
+TEST(SensorLogReaderErrors, OverlongLineIsRefusedAtTheLimitNotAtItsEnd) {
+  // Issue 26: a 6 GiB line (or /dev/zero as a log) was read whole before the limit was checked.
+  // Here a 256 MiB header line without a newline: the reader stops after about 1 MiB of it.
+  CountingFillBuffer zeros("", '\0', std::size_t{256} << 20);
+  std::istream in(&zeros);
+  try {
+    SensorLogReader reader(in, "zeros");
+    ADD_FAILURE() << "read a header from zeros";
+  } catch (const SensorLogError& error) {
+    EXPECT_EQ(std::string(error.what()), "zeros:1: line: longer than 1 MiB (1048576 bytes, the protocol's limit)");
+  }
+  EXPECT_LT(zeros.handed_out(), kMaxLogLineBytes + (std::size_t{1} << 17));
+}
+
+TEST(SensorLogReader, GoesOnAfterAnOverlongLineWithoutHoldingIt) {
+  const std::string text = Log({kWheels, kWheels + std::string(3 * kMaxLogLineBytes, ' '), kWheels});
+  std::istringstream in(text);
+  SensorLogReader reader(in, "test.ndjson");
+  EXPECT_TRUE(reader.Next().has_value());
+  try {
+    (void)reader.Next();
+    ADD_FAILURE() << "read an overlong line";
+  } catch (const SensorLogError& error) {
+    EXPECT_EQ(error.line(), 3u);
+  }
+  EXPECT_TRUE(reader.Next().has_value());  // the line after the overlong one
+  EXPECT_EQ(reader.line_number(), 4u);
+  EXPECT_FALSE(reader.Next().has_value());
+}
+
+TEST(SensorLogReaderErrors, HeaderNameListsHaveALimit) {
+  // Issue 26: 100,000 wheel names took 13-25 s to reject (a quadratic duplicate check).
+  std::string names;
+  for (int i = 0; i < 100000; ++i) names += std::string(i ? "," : "") + "\"w" + std::to_string(i) + "\"";
+  std::string header = kHeader;
+  header.replace(header.find(R"(["left","right"])"), 16, "[" + names + "]");
+  EXPECT_EQ(ErrorOf(header + "\n"), "test.ndjson:1: wheels: 100000 names, more than the limit of 64");
+  std::string sensors;
+  for (int i = 0; i < 257; ++i) sensors += std::string(i ? "," : "") + "\"u" + std::to_string(i) + "\"";
+  header = kHeader;
+  header.replace(header.find(R"(["us_left"])"), 11, "[" + sensors + "]");
+  EXPECT_EQ(ErrorOf(header + "\n"), "test.ndjson:1: ultrasonic: 257 names, more than the limit of 256");
+  // At the limit, with the duplicate last: found by the (linear) set check.
+  std::string at_limit;
+  for (int i = 0; i < 64; ++i) at_limit += std::string(i ? "," : "") + "\"w" + std::to_string(i == 63 ? 0 : i) + "\"";
+  header = kHeader;
+  header.replace(header.find(R"(["left","right"])"), 16, "[" + at_limit + "]");
+  EXPECT_EQ(ErrorOf(header + "\n"), "test.ndjson:1: wheels[63]: duplicate name \"w0\"");
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <set>
 #include <sstream>
 #include <string>
@@ -104,6 +105,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.map_aided.gate_probability, b.map_aided.gate_probability);
   EXPECT_EQ(a.max_prediction_step_s, b.max_prediction_step_s);
   EXPECT_EQ(a.max_prediction_gap_s, b.max_prediction_gap_s);
+  EXPECT_EQ(a.max_time_jump_s, b.max_time_jump_s);
 }
 
 json DefaultJson() {
@@ -267,7 +269,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryMissingKeyIsNamed) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 69u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 70u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     json edited = base;
     edited.at(pointer.parent_pointer()).erase(pointer.back());
@@ -310,7 +312,7 @@ TEST(FilterConfig, MaxModelSlipMustBeBelowOne) {
   FilterConfig config;
   config.slip_aware_odometry.max_model_slip = 1.0;
   EXPECT_EQ(FilterConfigProblem(config),
-            std::optional<std::string>("slip_aware_odometry.max_model_slip must be in (0, 1)"));
+            std::optional<std::string>("slip_aware_odometry.max_model_slip must be in [0.01, 0.99], got 1"));
   config.slip_aware_odometry.max_model_slip = 0.95;
   EXPECT_FALSE(FilterConfigProblem(config).has_value());
 }
@@ -376,15 +378,55 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
     if (kMayBeZero.contains(path)) continue;  // below
     if (path == "wheels.speed_update_iterations") continue;  // a count (SpeedUpdateIterationsAreACount)
-    const bool probability = path.ends_with("gate_probability") || path == "slip_aware_odometry.max_model_slip";
+    const bool probability = path.ends_with("gate_probability");
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
       edited[pointer] = bad;
       EXPECT_THAT(ErrorOf(edited), AllOf(HasSubstr("edited.json: " + path),
-                                         HasSubstr(probability ? "must be in (0, 1)" : "must be finite and > 0")))
+                                         HasSubstr(probability ? "must be in (0, 1)" : "must be in [")))
           << path << " = " << bad;
     }
   }
+}
+
+// Issue 26: max_prediction_step_s = 1e-300 hung the filter (remaining -= dt made no progress), sigmas
+// of 1e300 overflowed it, max_prediction_gap_s = 1e300 let a 1e6 s gap run 16 s: every number has a
+// physical range, and the message names the key and the range in short numbers.
+TEST(FilterConfig, EveryNumberHasAPhysicalRange) {
+  const json base = DefaultJson();
+  for (const auto& [path, pointer] : Leaves(base)) {
+    if (!base[pointer].is_number() || path == "wheels.speed_update_iterations") continue;
+    const bool probability = path.ends_with("gate_probability");
+    std::vector<double> bad{1e300};
+    if (!kMayBeZero.contains(path)) bad.push_back(1e-300);
+    for (const double value : bad) {
+      json edited = base;
+      edited[pointer] = value;
+      const std::string error = ErrorOf(edited);
+      EXPECT_THAT(error, AllOf(HasSubstr("edited.json: " + path + " must be in "), HasSubstr(probability ? "(0, 1) and at least 0.5" : "["),
+                               HasSubstr(", got " + std::string(value > 1.0 ? "1e+300" : "1e-300"))))
+          << path << " = " << value;
+      EXPECT_LT(error.size(), 160u) << error;  // short numbers, never 309 digits
+    }
+  }
+  json edited = base;
+  edited["max_prediction_step_s"] = 1e-300;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: max_prediction_step_s must be in [0.0001, 1], got 1e-300"));
+  edited = base;
+  edited["max_prediction_gap_s"] = 1e300;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: max_prediction_gap_s must be in [0.0001, 3600], got 1e+300"));
+  edited = base;
+  edited["imu"]["gyro_sigma_radps"] = 1e300;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: imu.gyro_sigma_radps must be in [1e-09, 100], got 1e+300"));
+}
+
+TEST(FilterConfig, TimeJumpMustCoverThePredictionGap) {
+  json edited = DefaultJson();
+  EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").max_time_jump_s, 3600.0);
+  edited["max_time_jump_s"] = 1.0;  // < max_prediction_gap_s = 5
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: max_time_jump_s must be >= max_prediction_gap_s"));
+  edited.erase("max_time_jump_s");
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("max_time_jump_s"));
 }
 
 TEST(FilterConfig, SpeedUpdateIterationsAreACount) {
@@ -457,12 +499,14 @@ TEST(FilterConfig, EncoderLowPassTimeConstantMayBeZeroButNotNegative) {
   }
   edited["wheels"]["encoder_low_pass_time_constant_s"] = -0.01;
   EXPECT_THAT(ErrorOf(edited),
-              HasSubstr("edited.json: wheels.encoder_low_pass_time_constant_s must be finite and >= 0"));
+              HasSubstr("edited.json: wheels.encoder_low_pass_time_constant_s must be in [0, 10], got -0.01"));
 }
 
 TEST(FilterConfig, ConeHalfAngleMustBeBelowAQuarterTurn) {
   json edited = DefaultJson();
   edited["map_aided"]["cone_half_angle_rad"] = 1.6;  // > pi/2
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: map_aided.cone_half_angle_rad must be in [1e-06, 1.5708], got 1.6"));
+  edited["map_aided"]["cone_half_angle_rad"] = 0.5 * std::numbers::pi;  // inside the range, but not < pi/2
   EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: map_aided.cone_half_angle_rad must be < pi/2"));
   edited["map_aided"]["cone_half_angle_rad"] = 1.5;
   EXPECT_EQ(ErrorOf(edited), "");
@@ -525,7 +569,8 @@ TEST(FilterConfig, ProblemOfInCodeConfigsNamesTheField) {
   }
   FilterConfig config;
   config.gps.gate_probability = 1.0;
-  EXPECT_EQ(FilterConfigProblem(config), std::optional<std::string>("gps.gate_probability must be in (0, 1)"));
+  EXPECT_EQ(FilterConfigProblem(config),
+            std::optional<std::string>("gps.gate_probability must be in (0, 1) and at least 0.5, got 1"));
   config = FilterConfig{};
   config.max_prediction_step_s = kInf;
   EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("max_prediction_step_s"));

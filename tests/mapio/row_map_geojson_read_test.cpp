@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include <cstdio>
 #include <fstream>
 #include <string>
 
@@ -286,6 +287,64 @@ TEST(RowMapGeoJsonRead, ZeroLengthSegment) {
               "feature 0 (id 'ring')", "coordinates[0][2] and coordinates[0][3] are the same point");
 }
 
+std::string Polygon(const std::string& id, const std::string& coordinates) {
+  return Feature("\"" + id + "\"", R"({"type": "Polygon", "coordinates": )" + coordinates + "}");
+}
+
+TEST(RowMapGeoJsonRead, SelfIntersectingPolygonIsRefusedWithTheDefect) {
+  // Issue 26: a bow-tie outline was accepted; with --map the NEES reached 8.9e5. Boost.Geometry's
+  // is_valid names the defect and the point.
+  const std::string bow_tie = "[[[7.0, 45.0], [7.001, 45.001], [7.001, 45.0], [7.0, 45.001], [7.0, 45.0]]]";
+  ExpectError(Collection(kGoodLine + ", " + Polygon("bow", bow_tie)), "feature 1 (id 'bow')",
+              "the Polygon outline is not a valid ring: Geometry has invalid self-intersections");
+  // A spike: an edge that goes out and comes straight back.
+  const std::string spike =
+      "[[[7.0, 45.0], [7.001, 45.0], [7.002, 45.0], [7.001, 45.0], [7.001, 45.001], [7.0, 45.0]]]";
+  ExpectError(Collection(Polygon("spike", spike)), "feature 0 (id 'spike')", "the Polygon outline is not a valid ring");
+  // Zero area: all vertices on one line (the origin's meridian, a straight line in the local frame).
+  ExpectError(Collection(Polygon("flat", "[[[7.0, 45.0], [7.0, 45.001], [7.0, 45.002], [7.0, 45.0]]]")),
+              "feature 0 (id 'flat')", "the Polygon outline encloses no area");
+  // Both vertex orders of a valid ring are accepted.
+  EXPECT_NO_THROW(ParseRowMapGeoJson(Collection(Polygon("ccw", "[[[7, 45], [7.001, 45], [7.001, 45.001], [7, 45]]]"))));
+  EXPECT_NO_THROW(ParseRowMapGeoJson(Collection(Polygon("cw", "[[[7, 45], [7.001, 45.001], [7.001, 45], [7, 45]]]"))));
+}
+
+TEST(RowMapGeoJsonRead, FlatPolygonCoordinatesAreNamedAsSuch) {
+  // Issue 26: a ring written without its enclosing array was reported as "has 3 hole(s)".
+  ExpectError(Collection(Polygon("flat", "[[7.0, 45.0], [7.001, 45.0], [7.001, 45.001], [7.0, 45.0]]")),
+              "feature 0 (id 'flat')",
+              "\"coordinates\" of a Polygon must be an array of rings (arrays of [longitude, latitude] positions), "
+              "got an array of positions");
+  ExpectError(Collection(Polygon("numbers", "[7.0, 45.0]")), "feature 0 (id 'numbers')",
+              "must be an array of rings (arrays of [longitude, latitude] positions), got coordinates[0] = number");
+}
+
+TEST(RowMapGeoJsonRead, LineStringThatRetracesItselfIsRefused) {
+  // Issue 26: 10^6 vertices alternating between two points were accepted (one segment drawn 10^6 times).
+  std::string coordinates = "[";
+  for (int i = 0; i < 1000; ++i) coordinates += std::string(i ? ", " : "") + (i % 2 ? "[7.0, 45.001]" : "[7.0, 45.0]");
+  ExpectError(Collection(Line("zigzag", coordinates + "]")), "feature 0 (id 'zigzag')",
+              "the LineString turns back on itself at vertex 1");
+}
+
+TEST(RowMapGeoJsonRead, VertexCountsHaveALimit) {
+  // Refused before the positions are read; the limits are documented in docs/map-format.md.
+  std::string coordinates = "[";
+  for (std::size_t i = 0; i <= kMaxRowVertices; ++i) {
+    char latitude[32];  // 45 + i * 1e-7 degrees, exactly as text: distinct, collinear
+    std::snprintf(latitude, sizeof latitude, "45.%07zu", i);
+    coordinates += (i ? ", [7.0, " : "[7.0, ") + std::string(latitude) + "]";
+  }
+  coordinates += "]";
+  ExpectError(Collection(Line("dense", coordinates)), "feature 0 (id 'dense')",
+              "the row has 100001 vertices, more than the limit of 100000 per row");
+  // Eleven rows of 10^5 vertices: more than 10^6 in all.
+  std::string rows;
+  const std::string row_coordinates = coordinates.substr(0, coordinates.rfind(", [")) + "]";  // 10^5 vertices
+  for (int r = 0; r < 11; ++r) rows += (r ? ", " : "") + Line("r" + std::to_string(r), row_coordinates);
+  ExpectError(Collection(rows), "feature 10 (id 'r10')", "the map has more than the limit of 1000000 vertices in all");
+}
+
 TEST(RowMapGeoJsonRead, MissingFile) {
   const std::filesystem::path path = Fixture("does_not_exist.geojson");
   try {
@@ -294,7 +353,7 @@ TEST(RowMapGeoJsonRead, MissingFile) {
   } catch (const MapFormatError& e) {
     EXPECT_EQ(e.source(), path.string());
     EXPECT_EQ(e.location(), "");
-    EXPECT_THAT(e.reason(), HasSubstr("cannot open the file: No such file or directory"));
+    EXPECT_THAT(e.reason(), HasSubstr("cannot open row map file: No such file or directory"));
     EXPECT_EQ(std::string(e.what()), path.string() + ": " + e.reason());
   }
 }
@@ -319,7 +378,7 @@ TEST(RowMapGeoJsonRead, PathBelowARegularFileIsUnreadable) {
     FAIL() << "read below a regular file";
   } catch (const MapFormatError& e) {
     EXPECT_EQ(e.source(), (path / "child.geojson").string());
-    EXPECT_THAT(e.reason(), HasSubstr("cannot open the file: Not a directory"));
+    EXPECT_THAT(e.reason(), HasSubstr("cannot open row map file: Not a directory"));
   }
 }
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -85,7 +86,17 @@ TEST(RowMapGeoJsonWrite, RandomMapsRoundTrip) {
       row.id += std::to_string(r);  // not "r" + std::to_string(r): GCC 12 -Wrestrict false positive
       row.closed = r % 2 == 1;
       const int n = vertex_count(rng) + (row.closed ? 1 : 0);
-      for (int i = 0; i < n; ++i) row.points_m.emplace_back(coordinate_m(rng), coordinate_m(rng));
+      if (row.closed) {  // a star-shaped ring (vertices by angle around a centre): a valid outline (a
+                         // ring of random vertices crosses itself, which the reader refuses)
+        const Eigen::Vector2d centre(coordinate_m(rng), coordinate_m(rng));
+        std::uniform_real_distribution<double> radius_m(10.0, 2500.0);
+        for (int i = 0; i < n; ++i) {
+          const double angle = 2.0 * 3.141592653589793 * (i + 0.5 * std::uniform_real_distribution<double>()(rng)) / n;
+          row.points_m.push_back(centre + radius_m(rng) * Eigen::Vector2d(std::cos(angle), std::sin(angle)));
+        }
+      } else {
+        for (int i = 0; i < n; ++i) row.points_m.emplace_back(coordinate_m(rng), coordinate_m(rng));
+      }
       map.rows.push_back(std::move(row));
     }
     SCOPED_TRACE(origin.longitude_deg);

@@ -7,6 +7,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -109,15 +110,15 @@ INSTANTIATE_TEST_SUITE_P(
     {"name": "front_right")",
                   R"("nominal_radius_m": -0.254, "steerable": true},
     {"name": "front_right")",
-                  "wheels[0].nominal_radius_m", "must be > 0"},
-        ErrorCase{"mass zero", R"("mass_kg": 120.0)", R"("mass_kg": 0.0)", "mass_kg", "> 0"},
+                  "wheels[0].nominal_radius_m", "must be in [0.005, 5], got -0.254"},
+        ErrorCase{"mass zero", R"("mass_kg": 120.0)", R"("mass_kg": 0.0)", "mass_kg", "must be in [0.1, 100000], got 0"},
         ErrorCase{"unknown kind", R"("four_wheel_steer")", R"("hovercraft")", "kind", "hovercraft"},
         ErrorCase{"yaw out of range", R"("yaw_rad": 1.5})", R"("yaw_rad": 7.0})", "ultrasonic[0].yaw_rad",
                   "must be in"},
         ErrorCase{"mount not object", R"("imu": {"name": "imu", "position_m": [0.0, 0.0, 0.25], "yaw_rad": 0.0})",
                   R"("imu": 3)", "imu", "must be an object"},
         ErrorCase{"steering limit", R"("max_steering_angle_rad": 1.0)", R"("max_steering_angle_rad": 4.0)",
-                  "max_steering_angle_rad", "(0, pi]"},
+                  "max_steering_angle_rad", "must be in [0, 3.14159], got 4"},
         ErrorCase{"fixed wheel on 4WS", R"("position_m": [-0.5, -0.4], "nominal_radius_m": 0.254, "steerable": true)",
                   R"("position_m": [-0.5, -0.4], "nominal_radius_m": 0.254, "steerable": false)",
                   "wheels[3].steerable", "must be true"},
@@ -165,6 +166,95 @@ TEST(ParseVehicleConfig, SkidSteerNeedsSymmetricTracksAndTrackData) {
                            R"(0.55], "nominal_radius_m": 0.15, "steerable": true)")),
               HasSubstr("wheels[0].steerable must be false"));
   EXPECT_THAT(ErrorOf(with("\"tracks\": {", "\"tracks\": {\"extra\": 1, ")), HasSubstr("tracks.extra: unknown key"));
+}
+
+// Issue 26: a wheel radius of 1e300 was accepted and aborted a replay without naming a key. Every
+// value has a physical domain, refused at load with the key path and the range printed short.
+INSTANTIATE_TEST_SUITE_P(
+    Domains, ParseVehicleConfigError,
+    ::testing::Values(
+        ErrorCase{"huge radius", R"("nominal_radius_m": 0.254, "steerable": true},
+    {"name": "front_right")",
+                  R"("nominal_radius_m": 1e300, "steerable": true},
+    {"name": "front_right")",
+                  "test.json: wheels[0].nominal_radius_m", "must be in [0.005, 5], got 1e+300"},
+        ErrorCase{"tiny radius", R"("nominal_radius_m": 0.254, "steerable": true},
+    {"name": "front_right")",
+                  R"("nominal_radius_m": 1e-300, "steerable": true},
+    {"name": "front_right")",
+                  "wheels[0].nominal_radius_m", "got 1e-300"},
+        ErrorCase{"huge mass", R"("mass_kg": 120.0)", R"("mass_kg": 1e300)", "mass_kg", "must be in [0.1, 100000], got 1e+300"},
+        ErrorCase{"far wheel", R"([0.5, -0.4])", "[0.5, -1e9]", "wheels[1].position_m[1]", "must be in [-50, 50], got -1e+09"},
+        ErrorCase{"far antenna", R"("position_m": [0.0, 0.0, 1.2])", R"("position_m": [0.0, 0.0, 1e300])",
+                  "gnss_antenna.position_m[2]", "must be in [-50, 50], got 1e+300"},
+        ErrorCase{"negative steering", R"("max_steering_angle_rad": 1.0)", R"("max_steering_angle_rad": -1)",
+                  "max_steering_angle_rad", "must be in [0, 3.14159], got -1"}),
+    [](const ::testing::TestParamInfo<ErrorCase>& case_info) {
+      std::string name = case_info.param.what;
+      for (char& c : name) {
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      }
+      return name;
+    });
+
+TEST(ParseVehicleConfig, NamesHaveALengthLimit) {
+  EXPECT_THAT(ErrorOf(ValidJsonWith(R"("name": "test-4ws")", "\"name\": \"" + std::string(300, 'n') + "\"")),
+              HasSubstr("test.json: name: longer than 256 bytes"));
+}
+
+TEST(ParseVehicleConfig, TrackValuesHaveDomains) {
+  std::string text = R"({
+  "name": "t", "kind": "skid_steer", "mass_kg": 600.0, "max_steering_angle_rad": 0.0,
+  "wheels": [
+    {"name": "left_track", "position_m": [0.0, 0.55], "nominal_radius_m": 0.15, "steerable": false},
+    {"name": "right_track", "position_m": [0.0, -0.55], "nominal_radius_m": 0.15, "steerable": false}],
+  "tracks": {"contact_length_m": 1e300, "turning_resistance_coefficient": 0.3},
+  "gnss_antenna": {"name": "gnss", "position_m": [0.0, 0.0, 1.5], "yaw_rad": 0.0},
+  "imu": {"name": "imu", "position_m": [0.0, 0.0, 0.4], "yaw_rad": 0.0},
+  "ultrasonic": []})";
+  EXPECT_THAT(ErrorOf(text), HasSubstr("tracks.contact_length_m: must be in [0.01, 20], got 1e+300"));
+  text.replace(text.find("1e300"), 5, "1.0");
+  text.replace(text.find("0.3}"), 3, "1e9");
+  EXPECT_THAT(ErrorOf(text), HasSubstr("tracks.turning_resistance_coefficient: must be in [0, 10], got 1e+09"));
+}
+
+TEST(ParseVehicleConfig, WheelAndSensorCountsAreBoundedBeforeTheyAreRead) {
+  std::string wheels;
+  for (int i = 0; i < 17; ++i) {
+    wheels += std::string(i ? "," : "") + R"({"name": "w)" + std::to_string(i) +
+              R"(", "position_m": [0.5, 0.4], "nominal_radius_m": 0.254, "steerable": true})";
+  }
+  std::string text = ValidJson();
+  const auto begin = text.find("\"wheels\": [") + 10;
+  const auto end = text.find("}],", begin) + 2;
+  EXPECT_THAT(ErrorOf(text.replace(begin, end - begin, "[" + wheels + "]")),
+              HasSubstr("test.json: wheels: must have 1 to 16 elements, got 17"));
+  std::string sensors;
+  for (int i = 0; i < 65; ++i) sensors += std::string(i ? "," : "") + "1";
+  EXPECT_THAT(ErrorOf(ValidJsonWith(R"([{"name": "us_front_left", "position_m": [0.75, 0.5, 0.5], "yaw_rad": 1.5}])",
+                                    "[" + sensors + "]")),
+              HasSubstr("ultrasonic: must have at most 64 elements, got 65"));
+}
+
+TEST(LoadVehicleConfig, DevicesDirectoriesAndOversizedFilesAreRefused) {
+  // Issue 26: /dev/zero was read forever; a directory was reported as "invalid JSON".
+  const auto error_of = [](const std::filesystem::path& path) {
+    try {
+      LoadVehicleConfig(path);
+    } catch (const VehicleConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of("/dev/zero"), "/dev/zero: is a character device, not a regular file");
+  const test::ScratchDir dir;
+  EXPECT_EQ(error_of(dir.path()), dir.path().string() + ": is a directory, not a regular file");
+  const std::filesystem::path big = dir / "big.json";
+  std::ofstream(big).close();
+  std::filesystem::resize_file(big, (std::uintmax_t{16} << 20) + 1);
+  EXPECT_EQ(error_of(big), big.string() + ": is larger than the limit of 16 MiB (vehicle file)");
+  EXPECT_EQ(error_of(dir / "none.json"),
+            (dir / "none.json").string() + ": cannot open vehicle file: No such file or directory");
 }
 
 TEST(LoadVehicleConfig, MissingFileIsAnError) {

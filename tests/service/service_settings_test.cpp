@@ -64,6 +64,29 @@ TEST(ServiceSettings, BadFilesNameTheirKey) {
   EXPECT_THROW(LoadServiceSettings(dir / "missing.json"), ServiceSettingsError);
 }
 
+TEST(ServiceSettings, LiveViewIsOffByDefaultAndItsKeysHaveDomains) {
+  rowloc::test::ScratchDir dir;
+  EXPECT_EQ(ServiceSettings{}.http_port, -1);
+  const ServiceSettings on = LoadServiceSettings(Write(dir, R"({"http_port":0,"live_view_rate_hz":5})"));
+  EXPECT_EQ(on.http_port, 0);
+  EXPECT_EQ(on.live_view_rate_hz, 5.0);
+  EXPECT_NO_THROW(ValidateServiceSettings(on));
+  EXPECT_EQ(LoadServiceSettings(Write(dir, R"({"http_port":null})")).http_port, -1);
+  const auto refused = [&](const std::string& text, const std::string& fragment) {
+    try {
+      ValidateServiceSettings(LoadServiceSettings(Write(dir, text)));
+      ADD_FAILURE() << "accepted " << text;
+    } catch (const ServiceSettingsError& e) {
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  };
+  refused(R"({"http_port":70000})", "http_port");
+  refused(R"({"http_port":-5})", "http_port");
+  refused(R"({"http_port":"8080"})", "http_port");
+  refused(R"({"live_view_rate_hz":0})", "live_view_rate_hz");
+  refused(R"({"live_view_rate_hz":"fast"})", "live_view_rate_hz");
+}
+
 TEST(ServiceSettings, OtherAddressesNeedAToken) {
   ServiceSettings s;
   s.listen = "0.0.0.0";

@@ -212,3 +212,38 @@ TEST(ScenarioTest, MalformedOrMissingFileIsAnError) {
 
 }  // namespace
 }  // namespace rowloc::sim
+
+namespace rowloc::sim {
+namespace {
+
+// Issue 26: the simulator makes each fault the filter must survive (sensor_faults.hpp).
+TEST(ScenarioTest, FaultScenariosParseTheirFaults) {
+  EXPECT_TRUE(LoadScenario(ScenarioDir() / "agrimaro-tiles.json").faults.empty());
+  const Scenario outlier = LoadScenario(ScenarioDir() / "fault-gnss-outlier-before-init.json");
+  ASSERT_EQ(outlier.faults.gnss_outliers.size(), 1u);
+  EXPECT_EQ(outlier.faults.gnss_outliers[0].offset_m, Eigen::Vector2d(111.0, 0.0));
+  EXPECT_EQ(LoadScenario(ScenarioDir() / "fault-dead-imu.json").faults.imu_dead_after_s, 20.0);
+  const Scenario jump = LoadScenario(ScenarioDir() / "fault-clock-offset-1e18.json");
+  ASSERT_TRUE(jump.faults.clock_jump.has_value());
+  EXPECT_EQ(jump.faults.Stamp(7.0), 7.0);
+  EXPECT_EQ(jump.faults.Stamp(9.0), 9.0 + 1e18);
+  const Scenario wheel = LoadScenario(ScenarioDir() / "fault-dead-wheel-encoder.json");
+  ASSERT_EQ(wheel.faults.wheel_encoders_dead.size(), 1u);
+  EXPECT_EQ(wheel.faults.wheel_encoders_dead[0].wheel, "right");
+}
+
+TEST(ScenarioTest, BadFaultsAreNamed) {
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& d) { d["faults"] = {{"wheel_encoders_dead", {{{"wheel", "x"}, {"after_s", 1.0}}}}}; }),
+              HasSubstr("test.json: faults.wheel_encoders_dead[0].wheel: 'x' is not a wheel of the vehicle"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& d) { d["faults"] = {{"imu_dead", 1.0}}; }),
+              HasSubstr("faults.imu_dead"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& d) { d["faults"] = {{"clock_jump", {{"after_s", 1.0}, {"jump_s", -5.0}}}}; }),
+              HasSubstr("faults.clock_jump.jump_s"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles",
+                      [](json& d) { d["faults"] = {{"gnss_outliers", {{{"t_s", 1.0}, {"offset_m", {1e300, 0.0}}}}}}; }),
+              HasSubstr("faults.gnss_outliers[0].offset_m"));
+  EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& d) { d["faults"] = 3; }), HasSubstr("faults"));
+}
+
+}  // namespace
+}  // namespace rowloc::sim

@@ -268,3 +268,47 @@ TEST(SimulationTest, StreamSeedsDiffer) {
 
 }  // namespace
 }  // namespace rowloc::sim
+
+namespace rowloc::sim {
+namespace {
+
+// Issue 26: each injected fault reaches the log (and never the truth).
+TEST(SimulationTest, InjectedFaultsReachTheLog) {
+  Scenario scenario = Shipped("agrimaro-tiles");
+  scenario.faults.gnss_outliers = {{0.0, Eigen::Vector2d(111.0, 0.0)}};
+  scenario.faults.imu_dead_after_s = 8.0;
+  scenario.faults.wheel_encoders_dead = {{"right", 6.0}};
+  scenario.faults.clock_jump = ClockJumpFault{10.0, 1e4};
+  const auto faulty = Simulate(scenario);
+  const auto clean = Simulate(Shipped("agrimaro-tiles"));
+  const std::vector<json> gps = Lines(faulty->sensors.str(), "gps"), clean_gps = Lines(clean->sensors.str(), "gps");
+  ASSERT_FALSE(gps.empty());
+  // The first fix moved by 111 m east (about 1.4e-3 degrees of longitude at 45 deg N); the second not.
+  EXPECT_NEAR((gps[0]["longitude_deg"].get<double>() - clean_gps[0]["longitude_deg"].get<double>()) * 78.8e3, 111.0, 1.0);
+  EXPECT_EQ(gps[1]["longitude_deg"], clean_gps[1]["longitude_deg"]);
+  std::size_t dead_imu = 0, jumped = 0;
+  for (const json& imu : Lines(faulty->sensors.str(), "imu")) {
+    const double t = imu["t"].get<double>();
+    if (t >= 10.0) {
+      EXPECT_GE(t, 1e4 + 10.0 - 1e-6);
+    }
+    jumped += t >= 1e4;
+    const bool dead = imu["accel_x_mps2"] == 0.0 && imu["accel_y_mps2"] == 0.0 && imu["gyro_z_radps"] == 0.0;
+    dead_imu += dead;
+    if (t < 8.0) {
+      EXPECT_FALSE(dead) << t;
+    }
+  }
+  EXPECT_GT(dead_imu, 500u);
+  EXPECT_GT(jumped, 500u);
+  for (const json& wheels : Lines(faulty->sensors.str(), "wheels")) {
+    const double t = wheels["t"].get<double>();
+    if (t >= 6.0) {
+      EXPECT_EQ(wheels["speed_radps"]["right"], 0.0) << t;
+    }
+  }
+  EXPECT_EQ(faulty->truth.str(), clean->truth.str());  // the truth is never faulted
+}
+
+}  // namespace
+}  // namespace rowloc::sim

@@ -7,7 +7,7 @@
 // bytes. The writer refuses what the protocol forbids instead of writing it: a non-finite number, a
 // time before the previous line's (estimate and update lines share one clock), a covariance that is
 // not symmetric positive semi-definite, duplicate or empty wheel names, a calibration value out of its
-// domain. Each refusal is a std::invalid_argument naming the line type and the reason; nothing is
+// domain, a sensor health with an unknown state or a repeated or empty sensor name. Each refusal is a std::invalid_argument naming the line type and the reason; nothing is
 // written for a refused record.
 #pragma once
 
@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <ostream>
@@ -24,6 +25,15 @@
 #include <vector>
 
 namespace rowloc::formats {
+
+/// One sensor's health in an `estimate` line (docs/protocol.md §3, `sensor_health`): the filter's
+/// verdict on it (state "ok", "suspect" or "excluded"), why, and its update counts since the start.
+struct SensorHealthRecord {
+  std::string sensor;
+  std::string state;   ///< "ok", "suspect" or "excluded"
+  std::string reason;  ///< empty when ok
+  std::size_t accepted = 0, gated = 0, skipped = 0, refused = 0;
+};
 
 /// One `estimate` line.
 struct EstimateRecord {
@@ -36,6 +46,8 @@ struct EstimateRecord {
   std::vector<std::pair<std::string, double>> slip;
   /// Calibration states per wheel, written as `wheel_calibration` when not empty.
   std::vector<WheelCalibrationRecord> wheel_calibration;
+  /// Sensors the filter distrusts (not ok), written as `sensor_health` when not empty.
+  std::vector<SensorHealthRecord> sensor_health;
 };
 
 /// One measurement update (docs/protocol.md §3 `update` line).

@@ -45,6 +45,10 @@ namespace rowloc::formats {
 
 /// Longest accepted line, terminator excluded (docs/protocol.md: "at most 1 MiB per line").
 inline constexpr std::size_t kMaxLogLineBytes = std::size_t{1} << 20;
+/// Most wheel (or track) names in a log header (docs/protocol.md §1; a vehicle file has at most 16).
+inline constexpr std::size_t kMaxLogWheels = 64;
+/// Most ultrasonic sensor names in a log header (docs/protocol.md §1; a vehicle file has at most 64).
+inline constexpr std::size_t kMaxLogUltrasonicSensors = 256;
 
 /// A defect of a sensor log or message, located by source and 1-based line number.
 class SensorLogError : public std::runtime_error {
@@ -94,16 +98,25 @@ class SensorLogReader {
   std::size_t line_number() const { return line_number_; }
   /// Messages returned by Next() so far.
   std::size_t messages_read() const { return messages_read_; }
+  /// False after a read error of the stream (Next() would fail again): a SensorLogError is then
+  /// the end of the log, not one bad line to skip.
+  bool readable() const { return !in_.bad(); }
 
  private:
+  enum class LineEnd { kNewline, kUnterminated, kTooLong, kEndOfStream };
+
   /// Reads the next non-empty line into `line` (terminator removed); false at the end of the stream.
   bool ReadLine(std::string& line);
+  /// Reads one line, holding at most kMaxLogLineBytes + 2 bytes of it: a longer line returns
+  /// kTooLong with its rest unread (ReadLine skips it on the next call, without storing it).
+  LineEnd ReadBoundedLine(std::string& line);
   LogHeader ReadHeader();
 
   std::istream& in_;
   std::string source_;
   std::size_t line_number_ = 0;
-  LogHeader header_;
+  bool skip_rest_of_line_ = false;  ///< the last line read was too long: its rest is still in in_
+  LogHeader header_;  // after the members ReadHeader() uses: initialized by it
   double last_time_s_ = -std::numeric_limits<double>::infinity();
   std::size_t messages_read_ = 0;
 };

@@ -18,7 +18,10 @@
 // chi-square quantile Q(m, p) (SPEC §6 "chi-square gating of outliers").
 //
 // File format (config/filters/*.json): every key required, unknown keys rejected, errors name the
-// source, the key path and the reason (the same strict reader as the simulator's files).
+// source, the key path and the reason (the same strict reader as the simulator's files). Every
+// number has a physical domain [min, max] (filter_config.cpp, Rules; docs/localization-filter.md
+// §1.1): a sign check alone let a prediction step of 1e-300 s hang the filter and a sigma of 1e300
+// overflow its covariance.
 #pragma once
 
 #include "rowloc/formats/gnss_fix_quality.hpp"
@@ -224,7 +227,11 @@ struct FilterConfig {
   VioNoise vio;
   MapAidedConfig map_aided;
   double max_prediction_step_s = 0.02;  ///< longer predictions are split into steps of at most this
-  double max_prediction_gap_s = 5.0;    ///< a longer gap between messages is an error (clock fault)
+  double max_prediction_gap_s = 5.0;    ///< a longer gap between messages re-initialises the filter
+  /// A message more than this ahead of the filter's time is refused as a clock fault (one sensor's
+  /// stamps offset), not predicted to; >= max_prediction_gap_s. Only a run of such messages with no
+  /// message in between at the filter's time moves the filter to the new time base (VehicleEkf).
+  double max_time_jump_s = 3600.0;
 };
 
 /// The horizontal 1-sigma (m) used for a fix of the given quality (kNone: not a fix; throws

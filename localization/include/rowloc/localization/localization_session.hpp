@@ -6,7 +6,8 @@
 // Per message: the filter processes it (predict to its time, then its update); every update is
 // counted per sensor (accepted / gated, last NIS) and, with record_updates, returned as an `update`
 // record; an `estimate` record (pose, (x, y, phi) covariance, per-wheel slip, wheel calibration) is
-// returned whenever the filter's time has advanced estimate_period_s since the last one. Slip is the
+// returned whenever the filter's time has advanced estimate_period_s since the last one (with
+// `sensor_health`, the sensors the filter distrusts: sensor_health.hpp). Slip is the
 // SAE slip of wheel_slip_estimate.hpp from the filtered state and the raw encoder speeds, or for a
 // skid-steer vehicle the track slip i = 1 - eta of the adaptive observer (track_slip_observer.hpp)
 // fed with the filtered pose and the raw sprocket speeds.
@@ -126,6 +127,10 @@ class LocalizationSession {
   };
   std::optional<std::vector<SmoothingMark>> marks_;
 };
+
+/// The sensors the filter does not trust (suspect or excluded; VehicleEkf::health), for the
+/// estimate record's `sensor_health`; empty when every sensor is ok.
+std::vector<formats::SensorHealthRecord> SensorHealthOf(const VehicleEkf& ekf);
 
 /// The calibration of every wheel (R_w, kappa and their sigmas) in state x with covariance p;
 /// empty without slip-aware odometry.

@@ -7,7 +7,9 @@
 // is applied as one sequential update (kalman_update.hpp: Joseph form, chi-square gate, NIS).
 // Initialisation (docs/localization-filter.md §2): the heading is not observable from one GNSS fix,
 // so the filter waits until the antenna has moved heading_baseline_m (and at least 10 fix sigmas)
-// from the first fix and takes
+// from an anchor fix that a consensus of fixes confirms (vehicle_ekf_initialisation.cpp: a third
+// fix agrees with both, every pair agrees with the odometry between them; an outlier is never the
+// anchor) and takes
 // the course of that displacement (corrected by the mean steering angle, reversed when the wheels
 // turn backwards) as the initial heading; or SetPose initialises it directly. Ultrasonic echoes are
 // used once a row map is attached (AttachRowMap; map_aided_ranging.hpp, issue 5): each echo is one
@@ -23,6 +25,13 @@
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
 // out, the filter (not the receiver) is taken to have drifted: the position covariance is inflated
 // by the innovation's outer product and the fix is applied (reported as a notice).
+// Clock faults: |t| > kMaxTimeS is refused; a stamp more than max_time_jump_s from the filter's time
+// is refused and counted (time_jumps_refused), unless a run of such messages shows the whole clock
+// moved (the filter then re-initialises on the new time base, with a notice). A prediction never
+// takes more than kMaxPredictionSteps steps. Sensor health (sensor_health.hpp; docs §8): a sensor
+// whose readings are stuck while the vehicle moves and that disagrees with the others is excluded
+// (its updates skipped, the state dropped and re-initialised without it, except for the GNSS),
+// every change reported as a notice.
 // Smoothing (EnableSmoothing, off by default): the filter records every transition and update for
 // the fixed-interval smoother (fixed_interval_smoother.hpp); the filter's own results do not change.
 #pragma once
@@ -34,6 +43,7 @@
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/measurement_models.hpp"
+#include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/mapio/local_frame.hpp"
@@ -108,8 +118,15 @@ struct ProcessResult {
   std::optional<EchoTrace> echo;      ///< ultrasonic messages with a row map attached
 };
 
+/// The name the health monitor (VehicleEkf::health) knows a message's sensor by: the message's
+/// sensor name, "wheels" or "steering".
+std::string HealthSensorName(const formats::SensorMessage& message);
+
 class VehicleEkf {
  public:
+  /// |t| above this is refused: beyond it a double cannot resolve 0.1 ms (Unix time, 1.7e9 s, fits).
+  static constexpr double kMaxTimeS = 1e12;
+
   /// wheel_order: the wheel names of the messages (the log header's), a permutation of the
   /// vehicle's wheel names. Throws FilterConfigError / std::invalid_argument on a bad config,
   /// origin or wheel order.
@@ -170,9 +187,31 @@ class VehicleEkf {
   std::vector<double> WheelSlip() const;
   /// The raw encoder speeds of the last wheels message (vehicle order); empty before the first.
   const std::vector<double>& last_wheel_speeds_radps() const { return last_speed_radps_; }
+  /// Health of every sensor seen (sensor_health.hpp): by the message's sensor name (gps, imu, vio,
+  /// ultrasonic), "wheels.<wheel>" for one encoder, or the update's name ("wheels", "nonholonomic",
+  /// "steering", "torque", "wheel_angles").
+  const SensorHealthMonitor& health() const { return health_; }
+  /// Prediction steps made since construction (at most kMaxPredictionSteps per message).
+  std::size_t prediction_steps() const { return prediction_steps_; }
+  /// Prediction steps per message at most, whatever max_prediction_step_s and the gap: the step
+  /// grows when a span needs more.
+  static constexpr long kMaxPredictionSteps = 100000;
+  /// Messages refused because their time stamp jumped beyond max_time_jump_s from the filter's.
+  std::size_t time_jumps_refused() const { return time_jumps_refused_; }
 
  private:
   void Validate(const formats::SensorMessage& message) const;
+  /// Refuses (FilterInputError) a message more than max_time_jump_s from the filter's time, unless
+  /// it ends a run of kTimeBaseRunMessages such messages: then the filter moves to the new time base
+  /// (Reset; the notice says so).
+  void CheckTimeJump(const formats::SensorMessage& message, std::optional<std::string>& notice);
+  /// Feeds the message's raw readings to the health monitor (stuck sensors).
+  void ObserveReadings(const formats::SensorMessage& message);
+  /// Collects the health changes into the result's notice; a newly excluded sensor drops the state
+  /// (it may have dragged it away) and the filter re-initialises from GNSS without it.
+  void ApplyHealthChanges(ProcessResult& result);
+  /// True, counted as skipped, when `sensor` is excluded: its update is not made.
+  bool SkipExcluded(const std::string& sensor);
   void PredictTo(double time_s);
   ProcessResult Apply(const formats::GpsMessage& gps);
   ProcessResult Apply(const formats::ImuMessage& imu);
@@ -201,6 +240,17 @@ class VehicleEkf {
   /// (the message's index in the log header, usually the vehicle's order) is tried first.
   std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
   std::optional<std::string> TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
+  /// A fix waiting for the initialisation, with the distance the wheels rolled until it.
+  struct PendingFix {
+    double time_s = 0.0;
+    Eigen::Vector2d antenna_enu = Eigen::Vector2d::Zero();
+    double sigma_m = 0.0;
+    double travelled_m = 0.0;
+  };
+  /// Two pending fixes agree with each other and with the odometry between them.
+  bool FixesAgree(const PendingFix& a, const PendingFix& b) const;
+  /// Before initialisation: the wheel-centre distance rolled since the last wheels message.
+  void AccumulateOdometry(double time_s);
   /// position_from_gnss: the pose's position is a fix's, so it carries the GNSS bias (if estimated).
   void InitialiseState(double time_s, const Eigen::Vector3d& pose, const Eigen::Matrix3d& pose_covariance,
                        bool position_from_gnss = false);
@@ -234,7 +284,15 @@ class VehicleEkf {
   Eigen::VectorXd x_;
   Eigen::MatrixXd p_;
   std::optional<double> gps_gated_since_s_;   ///< first gated fix since the last accepted one
-  std::optional<Eigen::Vector2d> anchor_enu_;  ///< first antenna fix while waiting for the heading
+  std::vector<PendingFix> pending_fixes_;  ///< fixes while waiting for the initialisation (consensus)
+  double travelled_m_ = 0.0;                ///< odometry before initialisation, m
+  std::optional<double> odometry_time_s_;   ///< time of the last wheels message before initialisation
+  SensorHealthMonitor health_;
+  std::size_t exclusions_seen_ = 0;          ///< sensors excluded so far (ApplyHealthChanges)
+  std::string last_gnss_sensor_;             ///< the sensor name of the last GNSS fix
+  std::size_t time_jump_run_ = 0;            ///< consecutive messages refused for a time jump
+  std::size_t time_jumps_refused_ = 0;
+  std::size_t prediction_steps_ = 0;
   bool wheel_angles_anchored_ = false;         ///< the wheel-angle states hold the encoders' angles
   Eigen::VectorXd last_wheel_angles_;          ///< the last wheels message's angles, vehicle order
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message

@@ -16,6 +16,7 @@
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/mapio/map_format_error.hpp"
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -24,6 +25,12 @@ namespace rowloc::mapio {
 
 /// Version written in "rowloc"."format_version"; the reader accepts only this one.
 inline constexpr int kRowMapFormatVersion = 1;
+
+/// Limits of the reader (docs/map-format.md, "Limits"): a row of more vertices, or a map of more
+/// vertices in all, is refused before its positions are read. 10^5 vertices are a 1 km row with a
+/// vertex every centimetre; the file itself is limited to kMaxRowMapFileBytes (input_file.hpp).
+inline constexpr std::size_t kMaxRowVertices = 100'000;
+inline constexpr std::size_t kMaxMapVertices = 1'000'000;
 
 /// Parses a row map. The result always passes geometry::ValidateRowMap. Throws MapFormatError
 /// naming source_name, the location and the reason for any problem (syntax, structure, values).
@@ -39,8 +46,9 @@ std::string FormatRowMapGeoJson(const geometry::RowMap& map);
 
 /// Writes FormatRowMapGeoJson(map) atomically: a temporary file in the same directory is
 /// written, flushed to disk (fsync) and renamed over path, so readers see the old or the new
-/// file, never a partial one. Throws std::invalid_argument as FormatRowMapGeoJson (nothing is
-/// written then) and std::system_error (naming the file) on I/O failure.
+/// file, never a partial one (mapio::OutputFile). Throws std::invalid_argument as
+/// FormatRowMapGeoJson (nothing is written then) and OutputFileError (naming the file and the OS
+/// reason) on I/O failure or when path exists and is not a regular file (a device, a directory).
 void WriteRowMapGeoJson(const geometry::RowMap& map, const std::filesystem::path& path);
 
 }  // namespace rowloc::mapio

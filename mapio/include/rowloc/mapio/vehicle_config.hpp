@@ -79,6 +79,25 @@ struct VehicleConfig {
   bool operator==(const VehicleConfig&) const = default;
 };
 
+/// Physical domains of the values of a vehicle file, refused at load with the key path and the
+/// range (docs/simulation-vehicles.md, "Value domains"): wide enough for any field robot or
+/// tractor, narrow enough that no product of them overflows or stalls the models (a wheel radius of
+/// 1e300 made a replay abort without naming a key, issue 26).
+struct VehicleConfigLimits {
+  static constexpr double kMinMassKg = 0.1;
+  static constexpr double kMaxMassKg = 1e5;                  ///< 100 t
+  static constexpr double kMaxSteeringAngleRad = 3.141592653589793;  ///< pi
+  static constexpr double kMaxAbsPositionM = 50.0;           ///< every body-frame coordinate
+  static constexpr double kMinWheelRadiusM = 0.005;
+  static constexpr double kMaxWheelRadiusM = 5.0;
+  static constexpr double kMinTrackContactLengthM = 0.01;
+  static constexpr double kMaxTrackContactLengthM = 20.0;
+  static constexpr double kMaxTurningResistanceCoefficient = 10.0;
+  static constexpr std::size_t kMaxWheels = 16;              ///< wheels (or tracks) per vehicle
+  static constexpr std::size_t kMaxUltrasonicSensors = 64;
+  static constexpr std::size_t kMaxNameBytes = 256;          ///< vehicle, wheel and sensor names
+};
+
 /// A vehicle file that cannot be read, parsed or validated: what() names the source, the key path
 /// and the reason.
 class VehicleConfigError : public std::runtime_error {

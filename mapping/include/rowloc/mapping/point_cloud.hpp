@@ -40,14 +40,18 @@ class PointCloudError : public std::runtime_error {
 
 /// Reads a point cloud, by extension (case-insensitive): ".ply" (ASCII or binary) or ".pcd"
 /// (ASCII, binary or binary_compressed). Only the x, y, z fields are kept.
+/// The header is checked against the file first (CheckPcdFile / CheckPlyFile, point_cloud_header.hpp),
+/// so memory is bounded by what the file holds, not by what its header claims.
 /// Throws PointCloudError if the file is missing or not a regular file, the extension is unknown,
-/// PCL cannot parse it, it has no x/y/z float fields, it holds no points, or any point has a
-/// non-finite coordinate (the message gives the count).
+/// a header claim is not backed by the file (the message names the line and the claim), PCL cannot
+/// parse it, it has no x/y/z float fields, it holds no points, or any point has a non-finite
+/// coordinate (the message gives the count).
 PointCloud ReadPointCloud(const std::filesystem::path& path);
 
 /// Writes a point cloud as binary PLY or binary PCD (by extension, case-insensitive), with x, y, z
-/// as double. Throws PointCloudError on unknown extension, empty cloud, non-finite points (count
-/// in the message) or a write failure (e.g. missing directory).
+/// as double, through mapio::OutputFile (a temporary renamed over the target on success; never over
+/// a device or directory). Throws PointCloudError on unknown extension, empty cloud, non-finite
+/// points (count in the message) or a write failure (e.g. missing directory, with the OS reason).
 void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path);
 
 }  // namespace rowloc::mapping

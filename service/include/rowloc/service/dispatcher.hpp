@@ -67,6 +67,13 @@ class Dispatcher {
   std::size_t session_count() const;
   /// The session of that name, or null.
   std::shared_ptr<ServiceSession> FindSession(const std::string& name) const;
+  /// True when the server has no token or `given` is it (compared in constant time); the live
+  /// view's HTTP requests use the same rule as hello.
+  bool TokenMatches(std::string_view given) const;
+  bool requires_token() const { return !token_.empty(); }
+  /// The row map of that name from the maps directory, loaded once (ServiceError: kUnknownMap,
+  /// kInvalidName, kInvalidConfig).
+  std::shared_ptr<const geometry::RowMap> LoadMap(const std::string& name);
 
  private:
   using Json = nlohmann::json;
@@ -87,7 +94,6 @@ class Dispatcher {
   std::shared_ptr<ServiceSession> Session(const Json& request) const;
   /// Builds a session from its spec (open_session and resume); journal may be null.
   std::shared_ptr<ServiceSession> BuildSession(SessionSpec spec, std::unique_ptr<SessionJournal> journal);
-  std::shared_ptr<const geometry::RowMap> LoadMap(const std::string& name);
   /// The next free generated session name (s1, s2, ...). Registry lock held.
   std::string NewSessionName();
   void Reply(ClientContext& client, OrderedJson reply, const Json& id);

@@ -9,7 +9,7 @@
 // that sends requests but never reads replies) is closed. Connections above max_connections are
 // told `limit_exceeded` and closed; a connection idle for connection_idle_timeout_s is closed.
 // Stop (SIGINT, SIGTERM) stops accepting, tells every client (`{"type":"shutdown"}`), syncs the
-// journals and ends Run.
+// journals and ends Run. With an http_port the same threads also serve the live view (live_view.hpp).
 #pragma once
 
 #include "rowloc/service/dispatcher.hpp"
@@ -33,7 +33,13 @@ class Server {
   std::string tcp_endpoint() const;
   /// The Unix socket path, or "".
   std::string unix_socket() const;
+  /// "http://ADDRESS:PORT/" of the live view (live_view.hpp), or "" when http_port is -1 (off).
+  std::string live_view_url() const;
 
+  /// Catches SIGINT and SIGTERM from now on (they stop Run gracefully once it runs). `rowloc serve`
+  /// calls it before it prints where it listens, so that a script that sends SIGTERM as soon as it
+  /// has read that line gets a graceful stop, not the default action (death by the signal).
+  void CatchSignals();
   /// Serves until Stop (or SIGINT/SIGTERM when handle_signals), on settings().threads threads.
   void Run(bool handle_signals = true);
   /// Graceful stop; may be called from any thread.

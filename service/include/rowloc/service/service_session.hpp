@@ -43,7 +43,9 @@ struct SessionSpec {
   static SessionSpec FromJson(const nlohmann::json& j);  ///< throws std::invalid_argument
 };
 
-enum class StreamKind { kState, kEstimates };
+/// kState: state lines; kEstimates: the estimate stream; kLive: state lines plus the `gnss` and
+/// `echo` observation lines of live_observations.hpp (the live view's stream).
+enum class StreamKind { kState, kEstimates, kLive };
 
 class ServiceSession {
  public:
@@ -104,7 +106,7 @@ class ServiceSession {
     double last_push_t_s;
   };
   void ProcessReleased(formats::SensorMessage message, std::vector<std::string>& refusals);
-  void Publish(const localization::SessionStep& step);
+  void Publish(const formats::SensorMessage& message, const localization::SessionStep& step);
   /// The estimate and update lines of a step, each ending with ,"session":NAME}.
   std::vector<std::string> EstimateLines(const localization::SessionStep& step);
   nlohmann::ordered_json StateLocked() const;

@@ -26,6 +26,11 @@ class ServiceSettingsError : public std::runtime_error {
 struct ServiceSettings {
   std::string listen = "127.0.0.1";   ///< TCP address
   int port = 7878;                    ///< 0: any free port
+  /// The live view's HTTP/WebSocket port (live_view.hpp), on the same address: -1 (default): off,
+  /// 0: any free port.
+  int http_port = -1;
+  /// Most WebSocket frames per second a live-view client is sent (wall clock), in (0, 1000].
+  double live_view_rate_hz = 20.0;
   std::string unix_socket;            ///< empty: none
   std::string token_file;             ///< empty: no token (then only loopback addresses are allowed)
   std::filesystem::path vehicles_dir = "config/vehicles";

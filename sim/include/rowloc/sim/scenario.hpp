@@ -14,6 +14,7 @@
 #include "rowloc/sim/gnss_model.hpp"
 #include "rowloc/sim/imu_model.hpp"
 #include "rowloc/sim/route.hpp"
+#include "rowloc/sim/sensor_faults.hpp"
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/terrain.hpp"
 #include "rowloc/sim/terrain_map.hpp"
@@ -83,6 +84,8 @@ struct Scenario {
   /// scripts/validate-sim replays each (docs/simulation-scenarios.md). Their content is the
   /// localization's to check (`rowloc replay` parses them); the simulator only references them.
   std::vector<std::filesystem::path> filter_files;
+  /// "faults" (optional): sensor faults to inject (sensor_faults.hpp); none by default.
+  SensorFaults faults;
 };
 
 /// Parses scenario text; relative file references resolve against base_directory, and source_name

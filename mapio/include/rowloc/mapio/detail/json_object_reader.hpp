@@ -12,6 +12,8 @@
 // also reports a misspelt key as unknown rather than the correct spelling as missing).
 #pragma once
 
+#include "rowloc/mapio/input_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <Eigen/Core>
@@ -20,8 +22,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
-#include <fstream>
 #include <filesystem>
+#include <fstream>  // kept: includers may rely on it
 #include <initializer_list>
 #include <iterator>
 #include <limits>
@@ -46,15 +48,17 @@ nlohmann::json ParseJsonText(std::string_view text, const std::string& source,
   }
 }
 
-/// Reads a whole file; throws Error("<path>: cannot open <what>") if it cannot be read.
+/// Reads a whole configuration file through mapio::ReadInputFile (regular files only, at most
+/// max_bytes, 16 MiB by default); throws Error("<path>: cannot open <what>: <OS reason>"),
+/// Error("<path>: is a directory, not a regular file"), ... (input_file.hpp) if it cannot be read.
 template <typename Error>
-std::string ReadTextFile(const std::filesystem::path& path, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path.string() + ": cannot open " + what);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw Error(path.string() + ": cannot read " + what);
-  return text.str();
+std::string ReadTextFile(const std::filesystem::path& path, const std::string& what,
+                         std::uintmax_t max_bytes = kMaxConfigFileBytes) {
+  try {
+    return ReadInputFile(path, max_bytes, what);
+  } catch (const InputFileError& e) {
+    throw Error(e.what());
+  }
 }
 
 template <typename Error>

@@ -1,0 +1,21 @@
+# Runs a command whose output is an existing FIFO and checks that it is refused (exit 2, message
+# matching EXPECT_OUTPUT) and that the FIFO is still a FIFO: only regular files are ever replaced.
+#   cmake -DFIFO=path -DCOMMAND="prog;arg;..." -DEXPECT_OUTPUT=regex -P refuses_special.cmake
+file(REMOVE ${FIFO})
+execute_process(COMMAND mkfifo ${FIFO} RESULT_VARIABLE made)
+if(NOT made EQUAL 0)
+  message(FATAL_ERROR "mkfifo ${FIFO} failed")
+endif()
+execute_process(COMMAND ${COMMAND} RESULT_VARIABLE status OUTPUT_VARIABLE out ERROR_VARIABLE err)
+message("${out}${err}")
+execute_process(COMMAND test -p ${FIFO} RESULT_VARIABLE still_fifo)
+file(REMOVE ${FIFO})
+if(NOT status EQUAL 2)
+  message(FATAL_ERROR "expected exit status 2, got ${status}")
+endif()
+if(NOT "${err}" MATCHES "${EXPECT_OUTPUT}")
+  message(FATAL_ERROR "stderr does not match: ${EXPECT_OUTPUT}")
+endif()
+if(NOT still_fifo EQUAL 0)
+  message(FATAL_ERROR "${FIFO} was replaced")
+endif()
