@@ -1,4 +1,4 @@
-// Cost of the ellipsoid calculus (SPEC §4): parallel cuts in 2-D (the map-aided range update) and in
+// Cost of the ellipsoid calculus (docs/ellipsoid.md): parallel cuts in 2-D (the map-aided range update) and in
 // 12-D (the full AgriMaRo state), fixed and dynamic size, and the 12 -> 2 projection.
 // Target: a 2-D parallel cut <= 100 ns. Run the Release build with
 //   ellipsoid_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true

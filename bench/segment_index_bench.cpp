@@ -1,4 +1,4 @@
-// SegmentIndex query cost on 10^5-segment maps (SPEC §4 "Planar geometry"; target: an index
+// SegmentIndex query cost on 10^5-segment maps (docs/planar-geometry.md; target: an index
 // query <= 2 us). Two maps: a vineyard (closed canopy outlines of 1 m segments, rows 2.5 m apart,
 // queries from the corridors) and uniformly random segments of the same density.
 // Run: segment_index_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true

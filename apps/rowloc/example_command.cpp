@@ -1,12 +1,12 @@
 // `rowloc example`: a worked example of the map-aided ultrasonic measurement on a row map.
 //
-// A vehicle (the four-wheel-steer vineyard UGV of seed 002: L = 1.5 m, T = 1 m, four ultrasonic
+// A vehicle (the four-wheel-steer vineyard UGV of Donati 2021: L = 1.5 m, T = 1 m, four ultrasonic
 // sensors at the corners looking sideways) stands in a corridor of the map. Its predicted
 // position is a k-sigma ellipse (P = k^2 S) around a point that is off by a known error from the
 // true position. Each sensor's echo is simulated by a cone cast from the *true* pose against the
 // map; the filter side then picks the row segment from the *predicted* pose (R-tree cone cast),
 // turns the range into a slab (localization::MakeRangeSlab) and parallel-cuts the ellipse
-// (geometry::ParallelCut, SPEC §4), one sensor after the other, as in seed 002 ch. 4.
+// (geometry::ParallelCut), one sensor after the other, as in Donati 2021 ch. 4.
 // Heading is taken as known here; the filter (issue 5) accounts for its uncertainty. --plot DIR
 // draws the rows, the truth, the slabs and the ellipse before and after each cut (example_plot.hpp).
 #include "commands.hpp"
@@ -43,7 +43,7 @@ struct ExampleOptions {
   double error_along_m = 0.40;   // prediction error along the corridor (forward), m
   double sigma_m = 0.3;          // predicted position standard deviation (each axis), m
   double k_sigma = 3.0;          // ellipse scale k: P = k^2 S
-  double range_sigma_m = 0.003;  // ultrasonic range standard deviation (seed 002), m
+  double range_sigma_m = 0.003;  // ultrasonic range standard deviation (Donati 2021), m
   double max_range_m = 4.0;
   std::string plot_dir;          // --plot: directory of the picture (empty: none)
 };

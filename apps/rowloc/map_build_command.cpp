@@ -109,7 +109,7 @@ void RegisterMapBuildCommands(CLI::App& app) {
   auto build = std::make_shared<BuildOptions>();
   CLI::App* b = map->add_subcommand(
       "build", "Build a row map from a survey point cloud: row-map.geojson, dtm.json, report.txt/json, map.svg");
-  b->add_option("survey", build->survey_path, "Survey point cloud (.ply or .pcd)")->required();
+  b->add_option("survey", build->survey_path, "Survey point cloud (.ply, .pcd or .las)")->required();
   b->add_option("-o,--output", build->output_dir, "Output directory")->required();
   CLI::Option* crs = b->add_option("--crs", build->crs, "The cloud is in UTM metres: EPSG:326zz (north) or EPSG:327zz (south)");
   CLI::Option* origin = b->add_option("--origin", build->origin,

@@ -1,5 +1,5 @@
 // `rowloc cloud info` and `rowloc cloud octomap`: the first steps of the survey pipeline
-// (SPEC §5) on a PLY or PCD point cloud.
+// (docs/mapping.md) on a PLY or PCD point cloud.
 #include "commands.hpp"
 #include "option_checks.hpp"
 
@@ -47,17 +47,17 @@ void RunOctoMap(const OctoMapCommandOptions& o) {
 }  // namespace
 
 void RegisterMappingCommands(CLI::App& app) {
-  CLI::App* cloud = app.add_subcommand("cloud", "Survey point clouds (PLY, PCD)");
+  CLI::App* cloud = app.add_subcommand("cloud", "Survey point clouds (PLY, PCD, LAS)");
   cloud->require_subcommand(1);
 
   auto info_path = std::make_shared<std::string>();
   CLI::App* info = cloud->add_subcommand("info", "Read a point cloud and print its size and extent");
-  info->add_option("file", *info_path, "Point cloud (.ply or .pcd)")->required();
+  info->add_option("file", *info_path, "Point cloud (.ply, .pcd or .las)")->required();
   info->callback([info_path] { RunReportingInputErrors("cloud info", [&info_path] { RunCloudInfo(*info_path); }); });
 
   auto opts = std::make_shared<OctoMapCommandOptions>();
   CLI::App* octo = cloud->add_subcommand("octomap", "Write an OctoMap (.bt) of a point cloud");
-  octo->add_option("input", opts->input_path, "Point cloud (.ply or .pcd)")->required();
+  octo->add_option("input", opts->input_path, "Point cloud (.ply, .pcd or .las)")->required();
   octo->add_option("output", opts->output_path, "OctoMap file (.bt)")->required();
   octo->add_option("--resolution", opts->resolution_m, "Voxel size [m]")
       ->check(FiniteInRange(mapping::kMinResolutionM, mapping::kMaxResolutionM, "RANGE"));

@@ -4,10 +4,17 @@
 // vehicle, filter and map this file equals `rowloc replay`'s output byte for byte (the service runs
 // the same session type). --rate: `max` (as fast as the service takes them), `realtime`, or a
 // multiple of real time such as `x10`. Exit 2 for bad input or a refused session, 1 when the
-// service went away.
+// service went away. The log is read as `rowloc replay` reads it (formats::BoundedLineReader): a
+// line longer than 1 MiB is refused after its first 1 MiB + 2 bytes, logged with its line number
+// and not sent, and so is an unterminated last line; a header that cannot be read ends the command
+// (exit 2). A vehicle or filter file is read by mapio::ReadInputFile (a regular file of at most
+// 16 MiB) and may nest at most 64 levels of arrays and objects, as the service allows.
 #include "commands.hpp"
 #include "option_checks.hpp"
 
+#include "rowloc/formats/bounded_line_reader.hpp"
+#include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/service/client.hpp"
 
@@ -16,6 +23,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -54,17 +62,74 @@ double WallPerLogSecond(const std::string& rate) {
   throw std::invalid_argument("--rate: expected max, realtime or xN (N > 0), got '" + rate + "'");
 }
 
-/// A vehicle or filter: a file (sent inline) when the path exists, else a name on the server.
-void AddConfig(nlohmann::json& request, const std::string& value, const char* name_key, const char* inline_key) {
+/// Deepest nesting of arrays and objects in the header and an inline configuration: the service
+/// refuses deeper request lines (docs/service.md §9), and copying or dumping a value recurses once
+/// per level (a vehicle file nested 10^6 levels deep crashed `send`).
+constexpr int kMaxNesting = 64;
+
+/// `text` as JSON (discarded when invalid); throws std::invalid_argument naming `source` when it
+/// nests deeper than kMaxNesting, without building the deeper values.
+nlohmann::json ParseShallowJson(const std::string& text, const std::string& source) {
+  bool too_deep = false;
+  nlohmann::json value = nlohmann::json::parse(
+      text,
+      [&too_deep](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
+        if (depth > kMaxNesting) too_deep = true;
+        return !too_deep;  // discards the values while the parser finishes
+      },
+      false);
+  if (too_deep) {
+    throw std::invalid_argument(source + ": nested deeper than " + std::to_string(kMaxNesting) +
+                                " levels of arrays and objects (the service's limit)");
+  }
+  return value;
+}
+
+/// True when `value` names an existing file (of any kind but a directory): it is read and sent
+/// inline; anything else is a name on the server.
+bool NamesAFile(const std::string& value) {
+  std::error_code ec;
+  const std::filesystem::file_type type = std::filesystem::status(value, ec).type();
+  return type != std::filesystem::file_type::not_found && type != std::filesystem::file_type::none &&
+         type != std::filesystem::file_type::directory;
+}
+
+/// A vehicle or filter: a file (sent inline) when the path names one, else a name on the server.
+void AddConfig(nlohmann::json& request, const std::string& value, const char* name_key, const char* inline_key,
+               const char* what) {
   if (value.empty()) return;
-  if (std::filesystem::is_regular_file(value)) {
-    std::ifstream in(value, std::ios::binary);
-    const nlohmann::json config = nlohmann::json::parse(in, nullptr, false);
-    if (config.is_discarded()) throw std::invalid_argument(value + ": not valid JSON");
-    if (!config.is_object()) throw std::invalid_argument(value + ": valid JSON, but not an object");
-    request[inline_key] = config;
-  } else {
+  if (!NamesAFile(value)) {
     request[name_key] = value;
+    return;
+  }
+  // Regular files of at most 16 MiB only: a FIFO, a device or a huge file is refused unread.
+  const std::string text = mapio::ReadInputFile(value, mapio::kMaxConfigFileBytes, what);
+  nlohmann::json config = ParseShallowJson(text, value);
+  if (config.is_discarded()) throw std::invalid_argument(value + ": not valid JSON");
+  if (!config.is_object()) throw std::invalid_argument(value + ": valid JSON, but not an object");
+  request[inline_key] = std::move(config);
+}
+
+/// The log's header line: the first non-empty line, refused (exit 2) as `rowloc replay` refuses it.
+std::string ReadHeaderLine(formats::BoundedLineReader& lines, const std::string& log_path) {
+  std::string line;
+  for (;;) {
+    const formats::BoundedLineReader::Result result = lines.Read(line);
+    const std::string where = log_path + ":" + std::to_string(lines.line_number());
+    switch (result) {
+      case formats::BoundedLineReader::Result::kEnd:
+        throw std::runtime_error(log_path + ": empty sensor log");
+      case formats::BoundedLineReader::Result::kReadError:
+        throw std::runtime_error(log_path + ":" + std::to_string(lines.line_number() + 1) + ": line: read error");
+      case formats::BoundedLineReader::Result::kTooLong:
+        throw std::runtime_error(where + ": line: longer than 1 MiB (" + std::to_string(formats::kMaxLogLineBytes) +
+                                 " bytes, the protocol's limit)");
+      case formats::BoundedLineReader::Result::kUnterminated:
+        throw std::runtime_error(where + ": line: not terminated by a newline (a truncated log?)");
+      case formats::BoundedLineReader::Result::kLine:
+        if (!line.empty()) return line;
+        break;
+    }
   }
 }
 
@@ -85,23 +150,22 @@ void DrainPushed(service::Client& client, const std::string& session, std::ostre
 }
 
 void RunSend(const SendOptions& o) {
-  const auto file_or_name = [](const std::string& value) {
-    return std::filesystem::is_regular_file(value) ? value : std::string();
-  };
+  const auto file_or_name = [](const std::string& value) { return NamesAFile(value) ? value : std::string(); };
   CheckCommandFiles({{"log", o.log_path}, {"--vehicle", file_or_name(o.vehicle)}, {"--filter", file_or_name(o.filter)}},
                     {{"--output", o.output_path}});
   const double wall_per_log_s = WallPerLogSecond(o.rate);
   std::ifstream log(o.log_path, std::ios::binary);
   if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log: " + std::strerror(errno));
-  std::string header_line;
-  if (!std::getline(log, header_line)) throw std::runtime_error(o.log_path + ": empty sensor log");
-  const nlohmann::json header = nlohmann::json::parse(header_line, nullptr, false);
+  formats::BoundedLineReader lines(log, formats::kMaxLogLineBytes);
+  const std::string header_line = ReadHeaderLine(lines, o.log_path);
+  const std::string header_where = o.log_path + ":" + std::to_string(lines.line_number());
+  const nlohmann::json header = ParseShallowJson(header_line, header_where);
   if (!header.is_object() || header.value("type", "") != "log_header") {
-    throw std::runtime_error(o.log_path + ":1: the first line must be a log_header");
+    throw std::runtime_error(header_where + ": the first line must be a log_header");
   }
   nlohmann::json open{{"header", header}, {"period_s", o.period_s}};
-  AddConfig(open, o.vehicle, "vehicle", "vehicle_config");
-  AddConfig(open, o.filter, "filter", "filter_config");
+  AddConfig(open, o.vehicle, "vehicle", "vehicle_config", "vehicle file");
+  AddConfig(open, o.filter, "filter", "filter_config", "filter file");
   if (!o.map.empty()) open["map"] = o.map;
   if (!o.session.empty()) open["session"] = o.session;
   // Before the session is opened: a bad output path must not leave a session open on the server.
@@ -115,13 +179,31 @@ void RunSend(const SendOptions& o) {
 
   const auto start = std::chrono::steady_clock::now();
   std::optional<double> first_t;
-  std::size_t sent = 0, written = 0, line_number = 1;
+  std::size_t sent = 0, written = 0, refused = 0;
   std::string line;
   nlohmann::json closed;
   try {
-    while (std::getline(log, line)) {
-      ++line_number;
-      if (line.empty() || line == "\r") continue;
+    for (;;) {
+      const formats::BoundedLineReader::Result result = lines.Read(line);
+      const std::size_t line_number = lines.line_number();
+      if (result == formats::BoundedLineReader::Result::kEnd) break;
+      if (result == formats::BoundedLineReader::Result::kReadError) {  // the log's fault (exit 2), session closed first
+        client.CloseSession(session);
+        throw std::invalid_argument(o.log_path + ":" + std::to_string(line_number + 1) + ": line: read error");
+      }
+      // As `rowloc replay`: a line the reader refuses is logged with its number, not sent, and the log goes on.
+      if (result == formats::BoundedLineReader::Result::kTooLong) {
+        spdlog::warn("{}:{}: rejected: line: longer than 1 MiB ({} bytes, the protocol's limit)", o.log_path,
+                     line_number, formats::kMaxLogLineBytes);
+        ++refused;
+        continue;
+      }
+      if (result == formats::BoundedLineReader::Result::kUnterminated) {
+        spdlog::warn("{}:{}: rejected: line: not terminated by a newline (a truncated log?)", o.log_path, line_number);
+        ++refused;
+        continue;
+      }
+      if (line.empty()) continue;
       if (wall_per_log_s > 0) {
         const nlohmann::json message = nlohmann::json::parse(line, nullptr, false);
         if (message.is_object() && message.contains("t") && message["t"].is_number()) {
@@ -150,6 +232,7 @@ void RunSend(const SendOptions& o) {
     throw ServiceGone("the service went away after " + std::to_string(sent) + " messages: " + e.what());
   }
   output.Commit();
+  if (refused > 0) spdlog::warn("{} lines of {} refused (not sent)", refused, o.log_path);
   spdlog::info("sent {} messages ({} accepted) in {:.2f} s; wrote {} lines to {}", sent,
                closed.value("messages", 0), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
                written, o.output_path);

@@ -8,6 +8,7 @@
 // open in the journal directory are resumed before the first connection is accepted. SIGINT and
 // SIGTERM stop it gracefully (clients told, journals synced); exit 0 then, 2 for bad settings.
 #include "commands.hpp"
+#include "option_checks.hpp"
 
 #include "rowloc/service/dispatcher.hpp"
 #include "rowloc/service/server.hpp"
@@ -89,7 +90,9 @@ void RegisterServeCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("serve", "Run the localization service (socket API, docs/service.md)");
   cmd->add_option("--config", o->config_path, "Settings file (JSON, docs/service.md §10)");
   cmd->add_option("--listen", o->listen, "TCP address (default 127.0.0.1; others need --token-file)");
-  cmd->add_option("--port", o->port, "TCP port (default 7878; 0: any free port, printed on stdout)");
+  // The ranges of ValidateServiceSettings (docs/service.md §10), checked here to name the option.
+  cmd->add_option("--port", o->port, "TCP port (default 7878; 0: any free port, printed on stdout)")
+      ->check(IntegerInRange(0, 65535, "PORT"));
   cmd->add_option("--unix-socket", o->unix_socket, "Also listen on this Unix socket");
   cmd->add_option("--token-file", o->token_file, "Every connection must send this file's token in hello");
   cmd->add_option("--vehicles", o->vehicles, "Directory of vehicle files NAME.json (default config/vehicles)");
@@ -97,10 +100,11 @@ void RegisterServeCommand(CLI::App& app) {
   cmd->add_option("--filters", o->filters, "Directory of filter files NAME.json (default config/filters)");
   cmd->add_option("--journal-dir", o->journal_dir, "Session journals (resumed at start); default: none");
   cmd->add_option("--fsync", o->fsync, "Journal fsync: none, interval (default) or always");
-  cmd->add_option("--threads", o->threads, "I/O and filter threads (default 2)");
+  cmd->add_option("--threads", o->threads, "I/O and filter threads (default 2)")->check(IntegerInRange(1, 64, "N"));
   cmd->add_option("--http-port", o->http_port,
                   "Serve the live view (browser) on this port, same address (0: any free port, printed on stdout; "
-                  "default: off)");
+                  "-1 or default: off)")
+      ->check(IntegerInRange(-1, 65535, "PORT"));
   cmd->callback([o] { RunReportingInputErrors("serve", [&o] { RunServe(*o); }); });
 }
 

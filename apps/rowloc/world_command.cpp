@@ -1,4 +1,4 @@
-// `rowloc world WORLD.json -o DIR`: the outputs of a simulated row world (issue 3, "World"; SPEC §8;
+// `rowloc world WORLD.json -o DIR`: the outputs of a simulated row world (issue 3, "World";
 // docs/simulation-world.md, "Outputs: row map, survey cloud, OctoMap"):
 //   DIR/row-map.geojson  the true row map at the slice height (RowWorld::TrueRowMap),
 //   DIR/survey.pcd       a synthetic survey cloud (sim::SampleCanopySurface, noisy),

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
 #include <numbers>
 #include <set>
 #include <string_view>
@@ -312,22 +311,22 @@ SensorMessage ParseSensorMessageObject(const nlohmann::json& object, const LogHe
 }
 
 SensorLogReader::SensorLogReader(std::istream& in, std::string source)
-    : in_(in), source_(std::move(source)), header_(ReadHeader()) {}
+    : in_(in), source_(std::move(source)), lines_(in, kMaxLogLineBytes), header_(ReadHeader()) {}
 
 LogHeader SensorLogReader::ReadHeader() {
   std::string line;
   if (!ReadLine(line)) throw SensorLogError(source_, 1, "log_header", "missing (the log is empty)");
-  return ParseLogHeader(line, source_, line_number_);
+  return ParseLogHeader(line, source_, lines_.line_number());
 }
 
 std::optional<SensorMessage> SensorLogReader::Next() {
   std::string line;
   if (!ReadLine(line)) return std::nullopt;
-  SensorMessage message = ParseSensorMessage(line, header_, source_, line_number_);
+  SensorMessage message = ParseSensorMessage(line, header_, source_, lines_.line_number());
   const double time_s = TimeOf(message);
   // A journal with a reorder window holds messages in arrival order; its reader orders them.
   if (time_s < last_time_s_ && header_.reorder_window_s == 0.0) {
-    throw SensorLogError(source_, line_number_, "t",
+    throw SensorLogError(source_, lines_.line_number(), "t",
                          FormatNumber(time_s) + " s is before the previous message's " + FormatNumber(last_time_s_) +
                              " s (time never decreases inside a log)");
   }
@@ -337,52 +336,21 @@ std::optional<SensorMessage> SensorLogReader::Next() {
 }
 
 bool SensorLogReader::ReadLine(std::string& line) {
-  if (skip_rest_of_line_) {  // the rest of an overlong line: skipped, never held in memory
-    in_.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
-    skip_rest_of_line_ = false;
-  }
   for (;;) {
-    const LineEnd end = ReadBoundedLine(line);
-    if (end == LineEnd::kEndOfStream) return false;
-    ++line_number_;
-    if (end == LineEnd::kTooLong) {
-      skip_rest_of_line_ = true;
-      throw SensorLogError(source_, line_number_, "line",
-                           "longer than 1 MiB (" + std::to_string(kMaxLogLineBytes) + " bytes, the protocol's limit)");
+    switch (lines_.Read(line)) {
+      case BoundedLineReader::Result::kEnd:
+        return false;
+      case BoundedLineReader::Result::kReadError:
+        throw SensorLogError(source_, lines_.line_number() + 1, "line", "read error");
+      case BoundedLineReader::Result::kTooLong:
+        throw SensorLogError(source_, lines_.line_number(), "line",
+                             "longer than 1 MiB (" + std::to_string(kMaxLogLineBytes) + " bytes, the protocol's limit)");
+      case BoundedLineReader::Result::kUnterminated:
+        throw SensorLogError(source_, lines_.line_number(), "line", "not terminated by a newline (a truncated log?)");
+      case BoundedLineReader::Result::kLine:
+        if (!line.empty()) return true;
+        break;
     }
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.size() > kMaxLogLineBytes) {
-      throw SensorLogError(source_, line_number_, "line",
-                           "longer than 1 MiB (" + std::to_string(kMaxLogLineBytes) + " bytes, the protocol's limit)");
-    }
-    if (end == LineEnd::kUnterminated) {
-      throw SensorLogError(source_, line_number_, "line", "not terminated by a newline (a truncated log?)");
-    }
-    if (!line.empty()) return true;
-  }
-}
-
-SensorLogReader::LineEnd SensorLogReader::ReadBoundedLine(std::string& line) {
-  // The limit plus one byte for a "\r" before the "\n"; one more byte proves the line too long.
-  constexpr std::size_t kMaxHeld = kMaxLogLineBytes + 2;
-  line.clear();
-  char chunk[1 << 14];
-  for (;;) {
-    in_.getline(chunk, sizeof chunk);  // stops at '\n' (extracted), at the end, or with a full chunk
-    const auto count = static_cast<std::size_t>(in_.gcount());
-    if (in_.bad()) throw SensorLogError(source_, line_number_ + 1, "line", "read error");
-    if (in_.eof()) {  // the stream ended inside the line (or before it)
-      line.append(chunk, count);
-      if (line.size() >= kMaxHeld) return LineEnd::kTooLong;
-      return line.empty() ? LineEnd::kEndOfStream : LineEnd::kUnterminated;
-    }
-    if (!in_.fail()) {  // '\n' found and extracted (counted by gcount, not stored)
-      line.append(chunk, count - 1);
-      return line.size() >= kMaxHeld ? LineEnd::kTooLong : LineEnd::kNewline;
-    }
-    in_.clear();  // a full chunk without '\n': go on, up to the limit
-    line.append(chunk, count);
-    if (line.size() >= kMaxHeld) return LineEnd::kTooLong;
   }
 }
 

@@ -1,6 +1,8 @@
 // Readers of the truth and estimate NDJSON streams (see trajectory_streams.hpp).
 #include "rowloc/formats/trajectory_streams.hpp"
 
+#include "rowloc/formats/bounded_line_reader.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
@@ -155,13 +157,22 @@ std::string CheckProtocol(const json& header, const std::string& family, const L
 }
 
 /// Iterates the non-blank lines of a stream as JSON objects: the callback gets (object, context).
+/// A line longer than kMaxProtocolLineBytes is refused after its first kMaxProtocolLineBytes + 2
+/// bytes (BoundedLineReader); the last line may lack its "\n".
 template <typename OnLine>
 void ForEachObject(std::istream& in, const std::string& source, const LineProgress& progress,
                    OnLine&& on_line) {
   std::string text;
   LineContext ctx{source, 0};
-  while (std::getline(in, text)) {
-    ++ctx.line;
+  BoundedLineReader lines(in, kMaxProtocolLineBytes);
+  for (;;) {
+    const BoundedLineReader::Result result = lines.Read(text);
+    if (result == BoundedLineReader::Result::kEnd) return;
+    if (result == BoundedLineReader::Result::kReadError) throw StreamFormatError(source + ": read error");
+    ctx.line = lines.line_number();
+    if (result == BoundedLineReader::Result::kTooLong) {
+      ctx.Fail("", "line longer than 1 MiB (" + std::to_string(kMaxProtocolLineBytes) + " bytes, the protocol's limit)");
+    }
     if (progress && ctx.line % kProgressLines == 0) progress(ctx.line);
     if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
     json obj;
@@ -173,7 +184,6 @@ void ForEachObject(std::istream& in, const std::string& source, const LineProgre
     if (!obj.is_object()) ctx.Fail("", "expected a JSON object");
     on_line(obj, ctx);
   }
-  if (in.bad()) throw StreamFormatError(source + ": read error");
 }
 
 /// The line rules of both streams: the first non-blank line is the header (type `header_type`,

@@ -1,4 +1,4 @@
-// Cut parameters tau, sigma, delta of the ellipsoid cuts (SPEC §4; formulas and their derivation in
+// Cut parameters tau, sigma, delta of the ellipsoid cuts (formulas and their derivation in
 // ellipsoid_cuts.hpp and docs/ellipsoid.md).
 #include "rowloc/geometry/ellipsoid_cuts.hpp"
 
@@ -39,7 +39,7 @@ CutParameters ParallelCutParameters(double alpha, double alpha_hat, Eigen::Index
   const double difference_of_squares = (ah - a) * (ah + a);
   const double rho = std::sqrt(4.0 * one_minus_a2 * one_minus_ah2 +
                                nd * nd * difference_of_squares * difference_of_squares);
-  // SPEC §4's sigma = (n + 2 (1 - a ah - rho/2) / (a - ah)^2) / (n + 1), multiplied above and
+  // The published sigma = (n + 2 (1 - a ah - rho/2) / (a - ah)^2) / (n + 1), multiplied above and
   // below by (1 - a ah + rho/2) > 0: (1 - a ah)^2 - rho^2/4 = (a - ah)^2 [1 - n^2 (a + ah)^2 / 4].
   const double sum = a + ah;
   const double numerator = 1.0 - nd * nd * sum * sum / 4.0;

@@ -103,7 +103,7 @@ std::optional<std::string> TrackSlipObserverConfigProblem(const TrackSlipObserve
   if (auto problem = GainsProblem(config.injection_gains_per_s, "injection_gains_per_s")) return problem;
   if (auto problem = GainsProblem(config.adaptation_gains, "adaptation_gains")) return problem;
   if (!(config.eta_min >= 0.0 && config.eta_min < config.eta_max && config.eta_max <= 2.0)) {
-    return "eta_min and eta_max must satisfy 0 <= eta_min < eta_max <= 2 (seed 001 eq. (4)); got [" +
+    return "eta_min and eta_max must satisfy 0 <= eta_min < eta_max <= 2 (Tazzari et al. n.d., eq. (4)); got [" +
            Format(config.eta_min) + ", " + Format(config.eta_max) + "]";
   }
   for (const auto& [value, name] : {std::pair{config.initial_eta_right, "initial_eta_right"},

@@ -239,7 +239,7 @@ VehicleConfig AgrimaroSwerveConfig() {
   c.name = "agrimaro-swerve";
   c.kind = VehicleKind::kSwerveDrive;
   c.mass_kg = 80.0;
-  c.max_steering_angle_rad = std::numbers::pi;  // slip ring: unlimited steering (seed 000 §2.2.2)
+  c.max_steering_angle_rad = std::numbers::pi;  // slip ring: unlimited steering (Danzi 2026 §2.2.2)
   c.wheels = {{"left_front", {0.5, 0.0}, 0.165, true},
               {"left_rear", {-0.5, 0.0}, 0.165, true},
               {"right", {0.0, -0.8}, 0.165, true}};

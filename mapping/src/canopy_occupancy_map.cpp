@@ -1,8 +1,9 @@
 // Canopy occupancy map through OctoMap (see canopy_occupancy_map.hpp).
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
 
+#include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/output_file.hpp"
-
+#define OCTOMAP_NODEBUGOUT  // no debug prints on stderr from OctoMap's headers in Debug builds either
 #include <octomap/OcTree.h>
 
 #include <cmath>
@@ -82,12 +83,12 @@ OctoMapSummary WriteOctoMap(const PointCloud& cloud, const OctoMapOptions& optio
     }
     tree.updateNode(key, /*occupied=*/true);
   }
-  // writeBinary() converts to maximum likelihood and prunes before writing.
-  try {
+  tree.toMaxLikelihood(); tree.prune();  // as writeBinary() does before writing (it is not called: see below)
+  try {  // writeBinary()'s bytes, without the " done." its writeBinaryConst() prints on stderr (OctoMap debug output)
     mapio::OutputFile file(bt_path);  // a temporary next to the target, renamed over it on success
-    if (!tree.writeBinary(file.temporary_path().string())) {
-      throw OccupancyMapError(bt_path, "OctoMap could not write the file");
-    }
+    file.stream() << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as"
+                  << " it is!)\n#\nid OcTree\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
+    tree.writeBinaryData(file.stream());  // a failed write fails Commit(), which checks the stream
     file.Commit();
   } catch (const mapio::OutputFileError& e) {
     throw OccupancyMapError(bt_path, e.what());
@@ -108,12 +109,17 @@ CanopyOccupancyMap::CanopyOccupancyMap(CanopyOccupancyMap&&) noexcept = default;
 CanopyOccupancyMap& CanopyOccupancyMap::operator=(CanopyOccupancyMap&&) noexcept = default;
 
 CanopyOccupancyMap CanopyOccupancyMap::Load(const std::filesystem::path& bt_path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(bt_path, ec)) {
-    throw OccupancyMapError(bt_path, "no such file");
+  // Through mapio::ReadInputFile: a regular file of at most kMaxOctoMapFileBytes, checked on the
+  // opened file before OctoMap sees a byte (OctoMap reads its first line whole, however long).
+  std::string bytes;
+  try {
+    bytes = mapio::ReadInputFile(bt_path, kMaxOctoMapFileBytes, "OctoMap file");
+  } catch (const mapio::InputFileError& e) {
+    throw OccupancyMapError(bt_path, e.reason());
   }
+  std::istringstream in(std::move(bytes), std::ios::binary);
   auto impl = std::make_unique<Impl>(0.1);  // readBinary() replaces the resolution
-  if (!impl->tree.readBinary(bt_path.string())) {
+  if (!impl->tree.readBinary(in)) {
     throw OccupancyMapError(bt_path, "not a valid binary OctoMap (.bt) file");
   }
   const double resolution_m = impl->tree.getResolution();

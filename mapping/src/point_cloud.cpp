@@ -2,6 +2,7 @@
 #include "rowloc/mapping/point_cloud.hpp"
 
 #include "rowloc/mapio/output_file.hpp"
+#include "rowloc/mapping/las_file.hpp"
 #include "rowloc/mapping/point_cloud_header.hpp"
 
 #include <pcl/PCLPointCloud2.h>
@@ -40,7 +41,7 @@ CloudFormat RequireFormat(const std::filesystem::path& path) {
   const std::optional<CloudFormat> format = FormatOf(path);
   if (!format) {
     throw PointCloudError(path, "unknown extension '" + path.extension().string() +
-                                    "' (expected .ply or .pcd)");
+                                    "' (expected .ply or .pcd; .las is also read)");
   }
   return *format;
 }
@@ -201,6 +202,7 @@ PointCloudError::PointCloudError(const std::filesystem::path& path, const std::s
       reason_(reason) {}
 
 PointCloud ReadPointCloud(const std::filesystem::path& path) {
+  if (IsLasPath(path)) return ReadLasPointCloud(path);  // LAS/LAZ: las_file.cpp, without PCL
   const CloudFormat format = RequireFormat(path);
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw PointCloudError(path, "no such file");

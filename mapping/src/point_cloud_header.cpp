@@ -107,17 +107,23 @@ void RequireBodyBytes(const HeaderLines& lines, std::uint64_t body, long double 
   }
 }
 
-/// Scans an ASCII body line by line in blocks: for each non-empty line, `check(line_number,
-/// record_index, values)`; returns the number of non-empty lines.
+/// Scans an ASCII body line by line in blocks: for each line with values, `check(line_number,
+/// record_index, values)`; returns the number of such lines. A line of white space only (spaces,
+/// tabs, "\r") is a record of 0 values when `blank_is_record` (PCL's PCD reader skips only empty
+/// lines: it reads "  " or "\r" as a point of zeros), else skipped like an empty line. A line
+/// longer than kMaxAsciiLineBytes is refused when that many bytes of it have been scanned (PCL
+/// would read it whole: a 1 GiB line of spaces took 2.2 GB).
 template <typename Check>
-std::uint64_t ScanAsciiLines(std::istream& in, std::size_t first_line, const Check& check) {
+std::uint64_t ScanAsciiLines(std::istream& in, std::size_t first_line, const Path& name, bool blank_is_record,
+                             const Check& check) {
   std::array<char, 1 << 16> buffer{};
   std::size_t line = first_line;
-  std::uint64_t records = 0, values = 0;
+  std::uint64_t records = 0, values = 0, bytes = 0;
   bool in_word = false;
   const auto end_line = [&] {
-    if (values > 0) check(line, records++, values);
+    if (values > 0 || (blank_is_record && bytes > 0)) check(line, records++, values);
     values = 0;
+    bytes = 0;
     in_word = false;
     ++line;
   };
@@ -127,7 +133,13 @@ std::uint64_t ScanAsciiLines(std::istream& in, std::size_t first_line, const Che
       const char c = buffer[static_cast<std::size_t>(i)];
       if (c == '\n') {
         end_line();
-      } else if (c == ' ' || c == '\t' || c == '\r') {
+        continue;
+      }
+      if (++bytes > kMaxAsciiLineBytes) {
+        throw PointCloudError(name, "line " + std::to_string(line) + " is longer than " +
+                                        std::to_string(kMaxAsciiLineBytes) + " bytes");
+      }
+      if (c == ' ' || c == '\t' || c == '\r') {
         in_word = false;
       } else if (!in_word) {
         in_word = true;
@@ -135,7 +147,7 @@ std::uint64_t ScanAsciiLines(std::istream& in, std::size_t first_line, const Che
       }
     }
   }
-  if (values > 0) end_line();
+  if (values > 0 || (blank_is_record && bytes > 0)) end_line();
   return records;
 }
 
@@ -310,7 +322,12 @@ PointCloudFileSummary CheckPcdFile(std::istream& in, const Path& name) {
   } else if (h.encoding == PointCloudEncoding::kBinaryCompressed) {
     CheckCompressedPcd(in, lines, RemainingBytes(in), needed);
   } else {
-    const std::uint64_t records = ScanAsciiLines(in, lines.line() + 1, [&](std::size_t line, std::uint64_t record, std::uint64_t n) {
+    const std::uint64_t records = ScanAsciiLines(in, lines.line() + 1, name, /*blank_is_record=*/true,
+                                                 [&](std::size_t line, std::uint64_t record, std::uint64_t n) {
+      if (n == 0) {
+        throw PointCloudError(name, "line " + std::to_string(line) +
+                                        ": white space only (PCL would read it as a point of zeros; remove the line)");
+      }
       if (record >= s.points) {
         throw PointCloudError(name, "line " + std::to_string(line) + ": more points than POINTS " + std::to_string(s.points));
       }
@@ -374,7 +391,8 @@ PointCloudFileSummary CheckPlyFile(std::istream& in, const Path& name) {
   }
   std::uint64_t total = 0;
   for (const PlyElement& e : elements) total += e.count;  // each < 2^32, at most kMaxFields of them
-  const std::uint64_t records = ScanAsciiLines(in, lines.line() + 1, [&](std::size_t line, std::uint64_t record, std::uint64_t n) {
+  const std::uint64_t records = ScanAsciiLines(in, lines.line() + 1, name, /*blank_is_record=*/false,
+                                               [&](std::size_t line, std::uint64_t record, std::uint64_t n) {
     if (record >= total) {
       throw PointCloudError(name, "line " + std::to_string(line) + ": more records than the header's elements (" +
                                       std::to_string(total) + ")");

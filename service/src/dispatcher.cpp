@@ -1,9 +1,11 @@
 // Request handling of the service (see dispatcher.hpp; the protocol is docs/service.md).
 #include "rowloc/service/dispatcher.hpp"
 
+#include "rowloc/formats/bounded_line_reader.hpp"
 #include "rowloc/formats/ndjson_writing.hpp"
 #include "rowloc/formats/sensor_log_reader.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
@@ -14,7 +16,6 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 namespace rowloc::service {
 namespace {
@@ -23,7 +24,11 @@ using Json = nlohmann::json;
 using OrderedJson = nlohmann::ordered_json;
 
 constexpr std::size_t kMaxIdBytes = 128;
-constexpr std::size_t kMaxConfigFileBytes = 4 << 20;
+constexpr std::uintmax_t kMaxConfigFileBytes = 4 << 20;
+/// A session's metadata in the journal directory holds one open_session request (at most
+/// kMaxLineBytesLimit) with its vehicle and filter (each at most kMaxConfigFileBytes): 128 MiB is
+/// above anything the server writes there.
+constexpr std::uintmax_t kMaxSessionMetadataBytes = std::uintmax_t{128} << 20;
 /// Deepest nesting of arrays and objects in a request line (the deepest real request, an inline
 /// configuration, has about 5 levels). nlohmann parses any depth, but copying or dumping a value
 /// recurses once per level: a header nested 32k levels deep overflowed the stack (found by
@@ -97,16 +102,25 @@ double OptionalNumber(const Json& request, const char* key, double fallback, dou
   return value;
 }
 
-std::string ReadConfigFile(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (std::filesystem::file_size(path, ec) > kMaxConfigFileBytes) {
-    Fail(ErrorCode::kInvalidConfig, path.filename().string() + ": larger than 4 MiB");
+/// A vehicle or filter file of the server's directories as a JSON object, through
+/// mapio::ReadInputFile: a FIFO, a device or a file above kMaxConfigFileBytes is refused unread
+/// (it could hang or exhaust the server), and so is nesting deeper than kMaxNestingDepth (copying
+/// or dumping the value recurses once per level). Fails with kInvalidConfig naming `what` and `name`.
+Json ReadConfigFile(const std::filesystem::path& path, const std::string& what, const std::string& name) {
+  const std::string quoted = what + " '" + name + "'";
+  std::string text;
+  try {
+    text = mapio::ReadInputFile(path, kMaxConfigFileBytes, what + " file");
+  } catch (const mapio::InputFileError& e) {
+    Fail(ErrorCode::kInvalidConfig, quoted + " (" + path.filename().string() + "): " + e.reason());
   }
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in) Fail(ErrorCode::kInvalidConfig, path.filename().string() + ": cannot read");
-  return text.str();
+  if (NestedDeeperThan(text, kMaxNestingDepth)) {
+    Fail(ErrorCode::kInvalidConfig, quoted + ": arrays and objects nested deeper than " +
+                                        std::to_string(kMaxNestingDepth) + " levels");
+  }
+  Json object = Json::parse(text, nullptr, false);
+  if (!object.is_object()) Fail(ErrorCode::kInvalidConfig, quoted + ": not a JSON object");
+  return object;
 }
 
 /// A vehicle or filter configuration by name or inline, as a JSON object.
@@ -127,10 +141,7 @@ Json ConfigObject(const Json& request, const char* name_key, const char* inline_
   const std::optional<std::string> given = OptionalString(request, name_key);
   if (!given) return Json(nullptr);
   name = *given;
-  const std::filesystem::path path = ResolveNamedFile(dir, name, ".json", missing, what);
-  Json object = Json::parse(ReadConfigFile(path), nullptr, false);
-  if (!object.is_object()) Fail(ErrorCode::kInvalidConfig, std::string(what) + " '" + name + "': not a JSON object");
-  return object;
+  return ReadConfigFile(ResolveNamedFile(dir, name, ".json", missing, what), what, name);
 }
 
 geometry::GeoOrigin OriginOf(const Json& value, const char* key) {
@@ -677,7 +688,11 @@ std::size_t Dispatcher::ResumeJournals(std::vector<std::string>& problems) {
   std::size_t resumed = 0;
   for (const std::string& name : SessionJournal::OpenSessions(settings_.journal_dir)) {
     try {
-      std::ifstream metadata(SessionJournal::MetadataPath(settings_.journal_dir, name));
+      const std::string metadata = mapio::ReadInputFile(SessionJournal::MetadataPath(settings_.journal_dir, name),
+                                                        kMaxSessionMetadataBytes, "session metadata");
+      if (NestedDeeperThan(metadata, kMaxNestingDepth)) {
+        throw std::runtime_error("session metadata nested deeper than " + std::to_string(kMaxNestingDepth) + " levels");
+      }
       const Json j = Json::parse(metadata, nullptr, false);
       if (j.is_discarded()) throw std::runtime_error("session metadata is not JSON");
       std::size_t truncated = 0;
@@ -688,13 +703,24 @@ std::size_t Dispatcher::ResumeJournals(std::vector<std::string>& problems) {
       std::ifstream in(journal->path(), std::ios::binary);
       const std::string source = journal->path().string();
       std::shared_ptr<ServiceSession> session = BuildSession(SessionSpec::FromJson(j), std::move(journal));
+      // Lines of at most kMaxLineBytesLimit (what any max_line_bytes lets in), never held longer.
+      formats::BoundedLineReader lines(in, kMaxLineBytesLimit);
       std::string line;
-      std::getline(in, line);  // the header
-      std::size_t line_number = 1, messages = 0;
-      while (std::getline(in, line)) {
-        ++line_number;
-        if (line.empty()) continue;
-        session->Submit(line, formats::ParseSensorMessage(line, session->header(), source, line_number), false);
+      std::size_t messages = 0;
+      for (;;) {
+        const formats::BoundedLineReader::Result result = lines.Read(line);
+        if (result == formats::BoundedLineReader::Result::kEnd) break;
+        const std::string where = source + ":" + std::to_string(lines.line_number());
+        if (result == formats::BoundedLineReader::Result::kReadError) throw std::runtime_error(source + ": read error");
+        if (result == formats::BoundedLineReader::Result::kTooLong) {
+          throw std::runtime_error(where + ": line longer than " + mapio::ByteCountText(kMaxLineBytesLimit) +
+                                   " (the largest max_line_bytes)");
+        }
+        if (result == formats::BoundedLineReader::Result::kUnterminated) {
+          throw std::runtime_error(where + ": line not terminated by a newline");
+        }
+        if (lines.line_number() == 1 || line.empty()) continue;  // the header (the session's spec has it)
+        session->Submit(line, formats::ParseSensorMessage(line, session->header(), source, lines.line_number()), false);
         ++messages;
       }
       std::lock_guard lock(registry_mutex_);

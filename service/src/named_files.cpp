@@ -22,7 +22,9 @@ std::filesystem::path ResolveNamedFile(const std::filesystem::path& directory, s
   }
   const std::filesystem::path path = directory / (std::string(name) + std::string(extension));
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
+  // Anything that exists is returned: its reader (mapio::ReadInputFile) refuses what is not a
+  // regular file, saying what it is, on the opened file (no window for a swap after this check).
+  if (!std::filesystem::exists(path, ec)) {
     throw ServiceError(missing, quoted + ": no file " + std::string(name) + std::string(extension) + " in " +
                                     directory.string());
   }

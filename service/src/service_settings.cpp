@@ -1,32 +1,27 @@
 // Settings of the service (see service_settings.hpp).
 #include "rowloc/service/service_settings.hpp"
 
+#include "rowloc/mapio/input_file.hpp"
+
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <functional>
 #include <map>
-#include <sstream>
 
 namespace rowloc::service {
 namespace {
 
 constexpr std::size_t kMaxSettingsFileBytes = 1 << 20;
 
+/// A whole small file through mapio::ReadInputFile: regular files only (a FIFO or a device is
+/// refused before a byte is read, checked on the opened file), at most max_bytes.
 std::string ReadSmallFile(const std::filesystem::path& path, std::size_t max_bytes, const char* what) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw ServiceSettingsError(path.string() + ": " + what + " is not a regular file");
+  try {
+    return mapio::ReadInputFile(path, max_bytes, what);
+  } catch (const mapio::InputFileError& e) {
+    throw ServiceSettingsError(e.what());
   }
-  if (std::filesystem::file_size(path, ec) > max_bytes) {
-    throw ServiceSettingsError(path.string() + ": " + what + " larger than " + std::to_string(max_bytes) + " bytes");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw ServiceSettingsError(path.string() + ": cannot open " + what);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 using Json = nlohmann::json;
@@ -167,7 +162,7 @@ void ValidateServiceSettings(const ServiceSettings& s) {
   CheckRange(std::isfinite(s.live_view_rate_hz) && s.live_view_rate_hz > 0 && s.live_view_rate_hz <= 1000,
              "live_view_rate_hz", "in (0, 1000] Hz");
   CheckRange(s.threads >= 1 && s.threads <= 64, "threads", "in [1, 64]");
-  CheckRange(s.max_line_bytes >= 256 && s.max_line_bytes <= (std::size_t{64} << 20), "max_line_bytes",
+  CheckRange(s.max_line_bytes >= 256 && s.max_line_bytes <= kMaxLineBytesLimit, "max_line_bytes",
              "in [256, 64 MiB]");
   CheckRange(s.max_connections >= 1 && s.max_connections <= 100000, "max_connections", "in [1, 100000]");
   CheckRange(s.max_sessions >= 1 && s.max_sessions <= 100000, "max_sessions", "in [1, 100000]");

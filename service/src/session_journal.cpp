@@ -4,6 +4,7 @@
 #include "rowloc/service/service_error.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -95,13 +96,39 @@ std::unique_ptr<SessionJournal> SessionJournal::Reopen(const std::filesystem::pa
                                                        const std::string& session, std::size_t max_bytes,
                                                        FsyncPolicy fsync, std::size_t& truncated_bytes) {
   const std::filesystem::path path = JournalPath(directory, session);
-  const int fd = ::open(path.c_str(), O_RDWR | O_APPEND | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO or a device put in the journal's place must not block the open; it is
+  // refused below, on the opened file, before a byte is read.
+  const int fd = ::open(path.c_str(), O_RDWR | O_APPEND | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) Fail(path, "cannot open the journal");
+  const auto close_and_fail = [fd, &path](const std::string& what) {
+    const int error = errno;
+    ::close(fd);
+    errno = error;
+    Fail(path, what);
+  };
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) close_and_fail("cannot examine the journal");
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw std::runtime_error(path.string() + ": the journal is not a regular file (a FIFO, a device or a directory)");
+  }
+  const int flags = ::fcntl(fd, F_GETFL);
+  if (flags >= 0) ::fcntl(fd, F_SETFL, flags & ~O_NONBLOCK);
   const off_t size = ::lseek(fd, 0, SEEK_END);
+  // Cut a last line that lacks its newline (the rest of a write interrupted by a power loss),
+  // scanning back from the end in blocks.
   off_t keep = size;
-  char c = '\n';
-  // Cut a last line that lacks its newline (the rest of a write interrupted by a power loss).
-  while (keep > 0 && ::pread(fd, &c, 1, keep - 1) == 1 && c != '\n') --keep;
+  char block[1 << 16];
+  while (keep > 0) {
+    const off_t start = std::max<off_t>(0, keep - static_cast<off_t>(sizeof block));
+    const auto want = static_cast<std::size_t>(keep - start);
+    if (::pread(fd, block, want, start) != static_cast<ssize_t>(want)) close_and_fail("cannot read the journal");
+    if (const void* newline = ::memrchr(block, '\n', want)) {
+      keep = start + (static_cast<const char*>(newline) - block) + 1;
+      break;
+    }
+    keep = start;
+  }
   truncated_bytes = static_cast<std::size_t>(size - keep);
   if (truncated_bytes > 0 && ::ftruncate(fd, keep) != 0) {
     ::close(fd);

@@ -138,7 +138,7 @@ std::string NisSection(const EvaluationResult& r) {
   }
   std::string out =
       "Innovations per sensor (accepted updates; whiteness: lags 1.." + std::to_string(r.options.max_lag) +
-      " inside +-1.96/sqrt(K m), seed 004 Eq. 42)\n" + t.Format() +
+      " inside +-1.96/sqrt(K m), Lindgren et al. 2002, Eq. 42)\n" + t.Format() +
       "Mean NIS with correlated samples (batch means: up to 20 batches of >= 4 correlation times):\n" + correlated.Format();
   for (const SensorInnovationResult& s : r.innovations) {
     if (!s.whiteness.not_computed.empty()) out += "  " + s.sensor + ": whiteness not computed: " + s.whiteness.not_computed + "\n";

@@ -1,4 +1,4 @@
-// Innovation metrics: recomputed NIS per sensor, gating, whiteness (see metrics.hpp; seed 004,
+// Innovation metrics: recomputed NIS per sensor, gating, whiteness (see metrics.hpp; Lindgren et al. 2002,
 // Eqs. 42-43).
 #include "rowloc/sim/metrics.hpp"
 
@@ -27,7 +27,7 @@ WhitenessResult InnovationWhiteness(const std::vector<Eigen::VectorXd>& whitened
   const std::size_t k_count = whitened.size();
   const std::size_t lags = std::min(max_lag, k_count - 1);
   // rho(l) of m-dimensional whitened white noise has variance ~ 1/(K m) (numerator: K terms of
-  // variance m; denominator ~ K m), so the band is z / sqrt(K m); seed 004's z / sqrt(K) is the m = 1 case.
+  // variance m; denominator ~ K m), so the band is z / sqrt(K m); Lindgren et al.'s z / sqrt(K) is the m = 1 case.
   const auto dim = static_cast<std::size_t>(whitened.front().size());
   r.band_half_width = WhitenessBandHalfWidth(k_count * dim, probability);
   std::size_t inside = 0;

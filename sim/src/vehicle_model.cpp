@@ -65,7 +65,7 @@ double SaePeripheralSpeed(double slip, double speed_mps) {
   return speed_mps * (1.0 - magnitude);
 }
 
-/// omega * r for the track slip i of seed 001 eq. (6): i = 1 - V/(omega r).
+/// omega * r for the track slip i of Tazzari et al. n.d. eq. (6): i = 1 - V/(omega r).
 double TrackPeripheralSpeed(double track_slip, double speed_mps) {
   return speed_mps / (1.0 - (track_slip >= 1.0 ? kSpinningSlipForSpeed : track_slip));
 }

@@ -76,6 +76,12 @@ rowloc_cli_status_test(exit_send_bad_option 2 "--period" send ${_head_log} --veh
 rowloc_cli_status_test(exit_send_missing_log 2 "send: log '.*no-such\\.ndjson': no such file"
                        send ${_h}/no-such.ndjson --vehicle v -o ${_h}/s.ndjson)
 rowloc_cli_status_test(exit_serve_bad_option 2 "--bogus" serve --bogus)
+# serve's numbers are checked as the others' are, naming the option and its range (before: "settings:
+# port: must be in ..." or "Could not convert: --port = 99999999999").
+rowloc_cli_status_test(exit_serve_bad_port 2 "--port: 70000 is not in \\[0, 65535\\]\n" serve --port 70000)
+rowloc_cli_status_test(exit_serve_huge_port 2 "--port: 99999999999 is not in \\[0, 65535\\]\n" serve --port 99999999999)
+rowloc_cli_status_test(exit_serve_bad_threads 2 "--threads: 0 is not in \\[1, 64\\]\n" serve --threads 0)
+rowloc_cli_status_test(exit_serve_bad_http_port 2 "--http-port: 'x' is not a whole number\n" serve --http-port x)
 rowloc_cli_test(exit_help_is_success ON "Usage:" map info --help)
 
 # --- stdout carries results only, logs go to stderr ---
@@ -129,6 +135,39 @@ add_test(NAME apps.map_sample_refuses_a_fifo
                  "-DEXPECT_OUTPUT=is a FIFO \\(named pipe\\); only a regular file is ever replaced"
                  -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/refuses_special.cmake)
 set_tests_properties(apps.map_sample_refuses_a_fifo PROPERTIES LABELS apps)
+
+# --- inputs read line by line: a line is refused once 1 MiB of it is read, never held whole ---
+# Before: /dev/zero as an evaluate input, a --calibration stream or a send log took GBs (std::getline);
+# send took a FIFO or /dev/zero as --vehicle for a name on the server, and crashed (exit 139) on a
+# vehicle file nested 10^6 levels deep.
+set(_eval_data ${PROJECT_SOURCE_DIR}/tests/data/evaluate)
+rowloc_cli_status_test(evaluate_refuses_an_endless_truth_line 2 "evaluate: /dev/zero:1: line longer than 1 MiB"
+                       evaluate /dev/zero ${_eval_data}/estimates.ndjson -o ${_h}/ev-zero --no-plots)
+rowloc_cli_status_test(evaluate_refuses_an_endless_estimate_line 2 "evaluate: /dev/zero:1: line longer than 1 MiB"
+                       evaluate ${_eval_data}/truth.ndjson /dev/zero -o ${_h}/ev-zero --no-plots)
+rowloc_cli_status_test(replay_refuses_an_endless_calibration_line 2 "replay: /dev/zero:1: line longer than 1 MiB"
+                       replay ${_head_log} --vehicle ${_swerve} --calibration /dev/zero -o ${_h}/r-zero.ndjson)
+rowloc_cli_status_test(send_refuses_an_endless_log_line 2
+                       "send: /dev/zero:1: line: longer than 1 MiB \\(1048576 bytes, the protocol's limit\\)"
+                       send /dev/zero --to 127.0.0.1:9 --vehicle v -o ${_h}/s-zero.ndjson)
+rowloc_cli_status_test(send_refuses_a_device_as_vehicle_file 2 "send: /dev/zero: is a character device, not a regular file"
+                       send ${_head_log} --to 127.0.0.1:9 --vehicle /dev/zero -o ${_h}/s-zero.ndjson)
+string(REPEAT "[" 1000000 _open)
+string(REPEAT "]" 1000000 _close)
+file(WRITE ${_h}/deep-vehicle.json "{\"name\":${_open}${_close}}")
+rowloc_cli_status_test(send_refuses_a_deeply_nested_vehicle_file 2
+                       "send: .*deep-vehicle\\.json: nested deeper than 64 levels of arrays and objects"
+                       send ${_head_log} --to 127.0.0.1:9 --vehicle ${_h}/deep-vehicle.json -o ${_h}/s-deep.ndjson)
+# Before the fix these took memory until killed: stop them well before that.
+set_tests_properties(apps.evaluate_refuses_an_endless_truth_line apps.evaluate_refuses_an_endless_estimate_line
+                     apps.replay_refuses_an_endless_calibration_line apps.send_refuses_an_endless_log_line
+                     PROPERTIES TIMEOUT 30)
+add_test(NAME apps.send_refuses_a_fifo_as_vehicle_file
+         COMMAND ${CMAKE_COMMAND} -DFIFO=${_h}/vehicle-fifo.json
+                 "-DCOMMAND=$<TARGET_FILE:rowloc>;send;${_head_log};--to;127.0.0.1:9;--vehicle;${_h}/vehicle-fifo.json;-o;${_h}/s-fifo.ndjson"
+                 "-DEXPECT_OUTPUT=vehicle-fifo\\.json: is a FIFO \\(named pipe\\), not a regular file"
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/refuses_special.cmake)
+set_tests_properties(apps.send_refuses_a_fifo_as_vehicle_file PROPERTIES LABELS apps TIMEOUT 30)
 
 # --- point clouds: header claims checked against the file (before: GBs, bad_alloc, zeros) ---
 set(_pcd_head "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n")

@@ -5,7 +5,8 @@
 #       simulates vineyard-002-4us, cuts its log to the first 20000 messages, serves the run's row
 #       map as "vineyard-002", and requires `rowloc send` to write the same bytes as `rowloc replay`:
 #       with the default filter, with --filter canopy-gnss-flat (a name on the server), and with the
-#       vehicle and filter given as files (sent inline).
+#       vehicle and filter given as files (sent inline); then the same for a log with a 2 MiB line and
+#       an unterminated last line, which both refuse (logged with their line numbers).
 #   send_cli.sh ROWLOC SRC WORK expect STATUS REGEX ARGS...
 #       runs `rowloc ARGS...` and requires exit STATUS and output matching REGEX (grep -E). When an
 #       argument holds @SERVER@, a server is started first and @SERVER@ becomes its HOST:PORT;
@@ -99,6 +100,25 @@ equals-replay)
     echo "$name: $(wc -l <"send-$name.ndjson") lines, the same bytes ($(tail -n 1 "send-$name.log" | sed 's/.*\] //'))"
   done
   cmp -s send-default.ndjson send-filter-by-name.ndjson && fail "the filter made no difference"
+  # Lines the log reader refuses (issue 26): a 2 MiB line (line 1001) and an unterminated last line.
+  # send refuses them as replay does (logged with their numbers, not sent) and writes the same bytes.
+  {
+    head -n 1000 log.ndjson
+    printf '{"type":"imu","t":0,"padding":"%s"}\n' "$(head -c 2097152 /dev/zero | tr '\0' x)"
+    tail -n +1001 log.ndjson | head -c -1
+  } >refused.ndjson
+  "$ROWLOC" send refused.ndjson --to "$SERVER_ADDR" --vehicle vineyard-ugv-4ws --map vineyard-002 \
+    -o send-refused.ndjson >send-refused.log 2>&1 || fail "rowloc send (refused): $(tail -n 20 send-refused.log)"
+  "$ROWLOC" replay refused.ndjson --vehicle "$vehicle" --map sim/row-map.geojson -o replay-refused.ndjson \
+    >replay-refused.log 2>&1 || fail "rowloc replay (refused): $(tail -n 20 replay-refused.log)"
+  for tool in send replay; do
+    grep -q "refused.ndjson:1001: rejected: line: longer than 1 MiB (1048576 bytes" "$tool-refused.log" ||
+      fail "$tool did not refuse line 1001: $(tail -n 20 "$tool-refused.log")"
+    grep -q "refused.ndjson:20002: rejected: line: not terminated by a newline" "$tool-refused.log" ||
+      fail "$tool did not refuse the unterminated last line: $(tail -n 20 "$tool-refused.log")"
+  done
+  cmp send-refused.ndjson replay-refused.ndjson || fail "refused lines: rowloc send and rowloc replay differ"
+  echo "refused lines: $(wc -l <send-refused.ndjson) lines, the same bytes"
   stop_server
   ;;
 expect)

@@ -3,6 +3,7 @@
 // "<source>:<line>: <key>: <reason>" of the error.
 #include "rowloc/formats/sensor_log_reader.hpp"
 
+#include "counting_fill_buffer.hpp"
 #include "sensor_log_test_writer.hpp"
 #include "test_support.hpp"
 
@@ -387,31 +388,7 @@ TEST(SensorLogReaderErrors, UnterminatedOrOverlongLine) {
   }
 }
 
-/// A stream of `size` bytes of `fill` (then its end) that counts the bytes it has handed out: an
-/// endless or huge line without a reader holding it all.
-class CountingFillBuffer : public std::streambuf {
- public:
-  CountingFillBuffer(std::string prefix, char fill, std::size_t size)
-      : prefix_(std::move(prefix)), fill_(fill), size_(size), block_(1 << 16, fill) {}
-  std::size_t handed_out() const { return handed_out_; }
-
- protected:
-  int_type underflow() override {
-    if (handed_out_ >= size_) return traits_type::eof();
-    std::string& block = handed_out_ < prefix_.size() ? prefix_ : block_;
-    const std::size_t n = std::min(block.size(), size_ - handed_out_);
-    setg(block.data(), block.data(), block.data() + n);
-    handed_out_ += n;
-    return traits_type::to_int_type(block[0]);
-  }
-
- private:
-  std::string prefix_;
-  char fill_;
-  std::size_t size_;
-  std::string block_;
-  std::size_t handed_out_ = 0;
-};
+using rowloc::test::CountingFillBuffer;
 
 TEST(SensorLogReaderErrors, OverlongLineIsRefusedAtTheLimitNotAtItsEnd) {
   // Issue 26: a 6 GiB line (or /dev/zero as a log) was read whole before the limit was checked.
@@ -441,6 +418,29 @@ TEST(SensorLogReader, GoesOnAfterAnOverlongLineWithoutHoldingIt) {
   EXPECT_TRUE(reader.Next().has_value());  // the line after the overlong one
   EXPECT_EQ(reader.line_number(), 4u);
   EXPECT_FALSE(reader.Next().has_value());
+}
+
+TEST(SensorLogReader, ALineJustOverTheLimitDoesNotTakeTheNextLineWithIt) {
+  // A line whose "\n" arrives in the same block as its limit-crossing bytes was refused and then
+  // the line after it was skipped as the overlong line's "rest" (lost, and every later line number
+  // one short). Lengths from the limit + 1 to a block beyond the limit.
+  for (const std::size_t over : {std::size_t{1}, std::size_t{2}, std::size_t{3}, std::size_t{100}, std::size_t{16383},
+                                 std::size_t{16384}, std::size_t{16385}}) {
+    const std::string overlong = kWheels + std::string(kMaxLogLineBytes + over - kWheels.size(), ' ');
+    const std::string text = Log({overlong, kWheels, kWheels});
+    std::istringstream in(text);
+    SensorLogReader reader(in, "test.ndjson");
+    try {
+      (void)reader.Next();
+      ADD_FAILURE() << "read an overlong line, " << over << " bytes over";
+    } catch (const SensorLogError& error) {
+      EXPECT_EQ(error.line(), 2u) << over;
+    }
+    std::size_t after = 0;
+    while (reader.Next()) ++after;
+    EXPECT_EQ(after, 2u) << over;  // both lines after the overlong one
+    EXPECT_EQ(reader.line_number(), 4u) << over;
+  }
 }
 
 TEST(SensorLogReaderErrors, HeaderNameListsHaveALimit) {

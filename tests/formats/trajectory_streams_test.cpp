@@ -2,6 +2,9 @@
 // clear error naming file, line and key for everything they reject.
 #include "rowloc/formats/trajectory_streams.hpp"
 
+#include "rowloc/formats/bounded_line_reader.hpp"
+
+#include "counting_fill_buffer.hpp"
 #include "test_support.hpp"
 
 #include <gmock/gmock.h>
@@ -112,6 +115,45 @@ TEST(EstimateStream, ReportsProgressByLineCount) {
   std::vector<std::size_t> calls;
   ParseEstimateStream(in, "est.ndjson", [&calls](std::size_t n) { calls.push_back(n); });
   EXPECT_THAT(calls, ::testing::ElementsAre(kProgressLines, 2 * kProgressLines));
+}
+
+TEST(StreamLines, ALineLongerThan1MiBIsRefusedAndOneAtTheLimitRead) {
+  // Issue 26: these readers took a line whole (std::getline), however long: a 2 MiB line of valid
+  // JSON was accepted, and /dev/zero as --calibration or as an evaluate input took GBs.
+  const std::string line = R"({"type":"truth","t":1,"x_m":0,"y_m":0,"phi_rad":0,"gnss_available":true})";
+  const std::string at_limit = line + std::string(kMaxProtocolLineBytes - line.size(), ' ');
+  EXPECT_EQ(ParseTruth(kTruthHeader + "\n" + at_limit + "\r\n").samples.size(), 1u);
+  const std::string over = line + std::string(2 * kMaxProtocolLineBytes, ' ');
+  try {
+    ParseTruth(kTruthHeader + "\n\n" + over + "\n");
+    ADD_FAILURE() << "accepted a 2 MiB line";
+  } catch (const StreamFormatError& e) {
+    EXPECT_STREQ(e.what(), "truth.ndjson:3: line longer than 1 MiB (1048576 bytes, the protocol's limit)");
+  }
+  try {
+    ParseEstimates(kEstimateHeader + "\n" + std::string(kMaxProtocolLineBytes + 1, ' '));  // unterminated too
+    ADD_FAILURE() << "accepted a line of 1 MiB + 1 byte";
+  } catch (const StreamFormatError& e) {
+    EXPECT_STREQ(e.what(), "est.ndjson:2: line longer than 1 MiB (1048576 bytes, the protocol's limit)");
+  }
+}
+
+TEST(StreamLines, AnEndlessLineIsRefusedAfter1MiB) {
+  for (const bool truth : {true, false}) {
+    rowloc::test::CountingFillBuffer zeros("", '\0', std::size_t{256} << 20);  // 256 MiB, no newline
+    std::istream in(&zeros);
+    try {
+      if (truth) {
+        ParseTruthStream(in, "zeros");
+      } else {
+        ParseEstimateStream(in, "zeros");
+      }
+      ADD_FAILURE() << "read a stream of zeros";
+    } catch (const StreamFormatError& e) {
+      EXPECT_STREQ(e.what(), "zeros:1: line longer than 1 MiB (1048576 bytes, the protocol's limit)");
+    }
+    EXPECT_LE(zeros.handed_out(), kMaxProtocolLineBytes + 2 + (std::size_t{1} << 16));
+  }
 }
 
 TEST(StreamFiles, MissingFileIsAnErrorNamingIt) {

@@ -1,4 +1,4 @@
-// Cone cast (SPEC §4 "Planar geometry"): the nearest point of a segment inside a sector.
+// Cone cast (docs/planar-geometry.md): the nearest point of a segment inside a sector.
 #include "rowloc/geometry/cone_cast.hpp"
 
 #include <gtest/gtest.h>

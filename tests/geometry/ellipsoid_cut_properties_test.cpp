@@ -1,6 +1,6 @@
-// Property tests of every cut in 2-D, 3-D and 12-D (fixed and dynamic size), SPEC §4:
+// Property tests of every cut in 2-D, 3-D and 12-D (fixed and dynamic size), docs/ellipsoid.md:
 // points of E ∩ cut lie in E+, vol(E+) <= vol(E), invariance to scaling g and to affine changes of
-// coordinates, and the s-versus-s^2 erratum of the shape update (SPEC §10).
+// coordinates, and the s-versus-s^2 erratum of the shape update (Donati 2021's, not copied).
 #include "rowloc/geometry/ellipsoid_cuts.hpp"
 
 #include "min_volume_ellipsoid.hpp"
@@ -206,7 +206,7 @@ TEST(EllipsoidCutPropertiesTest, CommutesWithAffineChangeOfCoordinates) {
   CheckAffineInvariance<Eigen::Dynamic>(7, 24);
 }
 
-// Seed 002 eq. (3.12) divides (P g)(P g)^T by s = sqrt(g^T P g) instead of s^2 (SPEC §10). With
+// Donati 2021 eq. (3.12) divides (P g)(P g)^T by s = sqrt(g^T P g) instead of s^2 (an erratum). With
 // g^T P g = 4 the erroneous ellipse is not even positive definite; with g^T P g = 1/4 it is too
 // large (not minimal); ours contains the half-ellipse and has the known minimum volume.
 TEST(EllipsoidCutPropertiesTest, ShapeUpdateDividesBySSquaredNotS) {

@@ -1,5 +1,5 @@
 // Tests of the cut statuses, degenerate inputs, the special cases (n = 1, one-sided slabs, the
-// unchanged region) and the stable sigma across alpha == alpha_hat (SPEC §4, §10).
+// unchanged region) and the stable sigma across alpha == alpha_hat (docs/ellipsoid.md).
 #include "rowloc/geometry/ellipsoid_cuts.hpp"
 
 #include <gtest/gtest.h>
@@ -82,7 +82,7 @@ TEST(EllipsoidCutsTest, DeepCutAtOrBelowMinusOneOverNIsUnchanged) {
 }
 
 TEST(EllipsoidCutsTest, DepthBeyondOneIsEmptyNeverClipped) {
-  // Seed 002 clips alpha > 1 to 1 (SPEC §10): that would return a single point. It is kEmpty.
+  // Donati 2021 clips alpha > 1 to 1 (an erratum): that would return a single point. It is kEmpty.
   const auto e = TestEllipse();
   const Eigen::Vector2d g(1.5, 0.5);
   const double s = std::sqrt(g.dot(e.shape() * g));
@@ -229,8 +229,8 @@ TEST(EllipsoidCutsTest, ThinSlabStaysPositiveDefinite) {
   }
 }
 
-// SPEC §4's sigma is 0/0 at alpha == alpha_hat; the rationalized form must be exact there,
-// agree with the SPEC form elsewhere and be continuous across the diagonal.
+// The published sigma is 0/0 at alpha == alpha_hat; the rationalized form must be exact there,
+// agree with the published form elsewhere and be continuous across the diagonal.
 TEST(EllipsoidCutsTest, StableSigmaAgreesWithSpecFormAndCentredLimit) {
   for (const int n : {2, 3, 12}) {
     const double nd = n;

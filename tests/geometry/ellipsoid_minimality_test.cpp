@@ -1,4 +1,4 @@
-// Minimality of the cuts (SPEC §4): in 2-D and 3-D (and 12-D) the closed-form E+ equals the
+// Minimality of the cuts (docs/ellipsoid.md): in 2-D and 3-D (and 12-D) the closed-form E+ equals the
 // minimum-volume ellipsoid of E ∩ cut found by an independent brute-force search
 // (tests/support/min_volume_ellipsoid.hpp), which is itself first checked on known answers.
 #include "rowloc/geometry/ellipsoid_cuts.hpp"
@@ -125,7 +125,7 @@ TEST(EllipsoidMinimalityTest, FixedSizeCutsMatchDynamicOnes) {
   EXPECT_TRUE(fixed.ellipsoid.center().isApprox(dynamic.ellipsoid.center(), 1e-14));
 }
 
-// The shape update of seed 002 (divided by s instead of s^2, SPEC §10) is not the minimum.
+// The shape update of Donati 2021 (divided by s instead of s^2, an erratum) is not the minimum.
 TEST(EllipsoidMinimalityTest, ErroneousSDivisionIsNotMinimal) {
   std::mt19937_64 rng(4);
   const int n = 3;

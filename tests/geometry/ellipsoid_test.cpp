@@ -1,5 +1,5 @@
-// Tests of the Ellipsoid value type (SPEC §3, §4): validation, FromCovariance, Mahalanobis distance,
-// volume, projection (principal submatrix, not the Schur-complement slice: SPEC §10).
+// Tests of the Ellipsoid value type (docs/ellipsoid.md): validation, FromCovariance, Mahalanobis distance,
+// volume, projection (principal submatrix, not the Schur-complement slice of Donati 2021).
 #include "rowloc/geometry/ellipsoid.hpp"
 
 #include "min_volume_ellipsoid.hpp"
@@ -180,7 +180,7 @@ TEST(EllipsoidTest, ProjectRejectsBadCoordinates) {
 
 // The projection must contain the projection of every point of E and be tight: the point of E
 // that maximizes y^T x (y in the subspace) projects onto its boundary. The Schur complement
-// (the slice through the centre, seed 002's erratum) fails to contain the projected points.
+// (the slice through the centre, Donati 2021's erratum) fails to contain the projected points.
 TEST(EllipsoidTest, ProjectionContainsProjectedPointsAndSchurSliceDoesNot) {
   std::mt19937_64 rng(2024);
   const int n = 12;

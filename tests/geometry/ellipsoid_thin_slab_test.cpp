@@ -125,7 +125,7 @@ TEST(EllipsoidThinSlab, OneMinusSigmaHasNoCancellation) {
         EXPECT_NEAR(p.one_minus_sigma, 1.0 - p.sigma, 1e-13 * (1.0 + std::abs(p.sigma))) << n << " " << a << " " << ah;
       }
     }
-    // Off-centre thin slab: against a long-double evaluation of the SPEC form.
+    // Off-centre thin slab: against a long-double evaluation of the published form.
     for (const double width : {1e-4, 1e-7, 1e-10}) {
       const double m = 0.37;
       const CutParameters p = ParallelCutParameters(-(m + width / 2), m - width / 2, n);

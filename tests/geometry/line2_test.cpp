@@ -1,4 +1,4 @@
-// Line2 in normal form (SPEC §4 "Planar geometry", §10: rows along y must work).
+// Line2 in normal form (docs/planar-geometry.md: rows along y must work).
 #include "rowloc/geometry/line2.hpp"
 
 #include <gtest/gtest.h>

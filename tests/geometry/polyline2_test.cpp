@@ -1,4 +1,4 @@
-// Polylines and polygons: the segment queries over a row (SPEC §3, §4 "Planar geometry").
+// Polylines and polygons: the segment queries over a row (docs/planar-geometry.md).
 #include "rowloc/geometry/polyline2.hpp"
 
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// Ray cast against a segment (SPEC §4 "Planar geometry"): geometry, edge cases, bad input, and
+// Ray cast against a segment (docs/planar-geometry.md): geometry, edge cases, bad input, and
 // random rays checked against Boost.Geometry's segment intersection as an independent oracle.
 #include "rowloc/geometry/ray_cast.hpp"
 

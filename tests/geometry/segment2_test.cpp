@@ -1,4 +1,4 @@
-// Segment2: closest point and distance (SPEC §4 "Planar geometry").
+// Segment2: closest point and distance (docs/planar-geometry.md).
 #include "rowloc/geometry/segment2.hpp"
 
 #include <gtest/gtest.h>

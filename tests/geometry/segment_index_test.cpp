@@ -1,4 +1,4 @@
-// SegmentIndex (SPEC §4 "Planar geometry"): every query against an exhaustive loop over all
+// SegmentIndex (docs/planar-geometry.md): every query against an exhaustive loop over all
 // segments, on 10^5 random segments and on vineyard maps with rows in every direction.
 #include "rowloc/geometry/segment_index.hpp"
 

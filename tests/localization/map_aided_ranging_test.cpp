@@ -414,7 +414,7 @@ TEST(MapAidedMeasurement, EllipsoidCutMovesTheCentreIntoTheSlabAndDepriorFusesBa
   EXPECT_TRUE(cut.jacobian.isApprox((Eigen::Matrix<double, 2, 3>() << 1, 0, 0, 0, 1, 0).finished()));
   // Slab on y: 1.25 + 0.05 -+ 3 * 0.003, widened by 3 * 0.001 rad * 0.75 m.
   const double lo = 1.30 - 0.009 - 0.00225, hi = 1.30 + 0.009 + 0.00225;
-  // Parallel cut of the 3-sigma circle (radius 0.9) by hand (SPEC §4 form of sigma, n = 2).
+  // Parallel cut of the 3-sigma circle (radius 0.9) by hand (published form of sigma, n = 2).
   const double a = (1.25 - hi) / 0.9, ah = (lo - 1.25) / 0.9;
   const double rho = std::sqrt(4 * (1 - a * a) * (1 - ah * ah) + 4 * std::pow(ah * ah - a * a, 2));
   const double sigma = (2 + 2 * (1 - a * ah - rho / 2) / ((a - ah) * (a - ah))) / 3;

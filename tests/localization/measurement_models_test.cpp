@@ -369,7 +369,7 @@ TEST(WheelSpeedModel, SlipAwareOdometerFollowsSeed004) {
       for (std::size_t i = 0; i < vehicle.wheels.size(); ++i) {
         const auto row = static_cast<Eigen::Index>(i);
         const double v = WheelLongitudinalVelocity(x, vehicle, layout, i);
-        // Seed 004's form with its torque/slip gradient k_s = N r / kappa (N = m g / wheel count).
+        // The form of Lindgren et al. 2002 with its torque/slip gradient k_s = N r / kappa (N = m g / wheel count).
         const double load_n = vehicle.mass_kg * 9.80665 / static_cast<double>(vehicle.wheels.size());
         const double k = load_n * vehicle.wheels[i].nominal_radius_m / x(layout.slip_compliance[i]);
         const double radius = x(layout.rolling_radius[i]);

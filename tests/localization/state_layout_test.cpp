@@ -86,7 +86,7 @@ TEST(StateLayout, SizesOfTheShippedVehicles) {
       EXPECT_EQ(names.back(), "bay_mps2");
     }
   }
-  // The AgriMaRo design (seed 000) has 12 states.
+  // The AgriMaRo design (Danzi 2026) has 12 states.
   EXPECT_EQ(StateLayout::For(mapio::AgrimaroSwerveConfig(), false).size, 12);
   EXPECT_EQ(StateLayout::For(mapio::AgrimaroSwerveConfig(), true).size, 18);
   EXPECT_EQ(StateLayout::For(mapio::VineyardUgv4wsConfig(), true).size, 21);

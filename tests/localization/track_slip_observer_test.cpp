@@ -18,7 +18,7 @@ using ::testing::HasSubstr;
 constexpr double kPi = std::numbers::pi;
 constexpr double kTrackWidthM = 1.1;  // config/vehicles/tracked.json: tracks at y = +-0.55 m
 
-// Constant track speeds and slip (seed 001 Assumption 1), driven from pose (2, -1, 0.3).
+// Constant track speeds and slip (Tazzari et al. n.d. Assumption 1), driven from pose (2, -1, 0.3).
 struct Motion {
   double eta_right, eta_left, v_right_mps, v_left_mps;
 };
@@ -230,7 +230,7 @@ TEST(TrackSlipObserver, LyapunovFunctionNeverIncreasesOnExactData) {
   }
 }
 
-// Seed 001 writes V with e^T L^-1 e; its cross terms only cancel for L = I, and for L = 0.2 I that
+// Tazzari et al. n.d. write V with e^T L^-1 e; its cross terms only cancel for L = I, and for L = 0.2 I that
 // V grows on exact data although the observer converges (the erratum in the header comment).
 TEST(TrackSlipObserver, PaperLyapunovWithLInverseIsNotMonotoneForNonIdentityL) {
   TrackSlipObserverConfig config;

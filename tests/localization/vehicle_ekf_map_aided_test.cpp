@@ -1,5 +1,5 @@
 // VehicleEkf with a row map (issue 5): the map-aided ultrasonic update end to end on a short
-// deterministic simulator run (one lane of the seed-002 vineyard), per method, and the input
+// deterministic simulator run (one lane of the Donati 2021 vineyard), per method, and the input
 // contract of AttachRowMap and of ultrasonic messages.
 #include "rowloc/formats/sensor_log_reader.hpp"
 #include "rowloc/formats/trajectory_streams.hpp"
@@ -139,7 +139,7 @@ TEST(VehicleEkfMapAided, CutMinusPriorIsConsistentButCoarserThanTheRange) {
 }
 
 TEST(VehicleEkfMapAided, ThesisCutCountsThePriorTwiceAndBecomesOverconfident) {
-  // Seed 002's method (the cut ellipse as a measurement): the prior is fused twice, P collapses
+  // Donati 2021's method (the cut ellipse as a measurement): the prior is fused twice, P collapses
   // and later slabs miss the ellipse: reported as contradicting echoes, never clipped.
   const SimRun& run = OneLaneRun();
   const Errors thesis = Replay(run, WithMethod(MapAidedMethod::kEllipsoidCut), true);

@@ -279,7 +279,7 @@ TEST(VehicleConfigProblem, ShippedConfigurationsAreValidAndOfTheirKind) {
 }
 
 TEST(VehicleConfig, VineyardUltrasonicSensorsAreAtTheCornersLookingSideways) {
-  // Seed 002 Table 5.5 (x right, y forward there) converted to x forward, y left: corners (+-L/2, +-T/2).
+  // Donati 2021 Table 5.5 (x right, y forward there) converted to x forward, y left: corners (+-L/2, +-T/2).
   const VehicleConfig config = VineyardUgv4wsConfig();
   ASSERT_EQ(config.ultrasonic.size(), 4u);
   for (const SensorMount& mount : config.ultrasonic) {

@@ -8,6 +8,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <array>
 #include <cmath>
 #include <fstream>
@@ -180,6 +182,29 @@ TEST(CanopyOccupancyMap, LoadRejectsMissingAndGarbageFiles) {
     out << "hello\n";
   }
   EXPECT_THROW(CanopyOccupancyMap::Load(dir / "text.bt"), OccupancyMapError);
+}
+
+TEST(CanopyOccupancyMap, LoadReadsOnlyARegularFileOfBoundedSize) {
+  // Issue 26 sibling: a FIFO, a device or a directory was "no such file", and OctoMap read the first
+  // line of any regular file whole (a 256 MiB line of zeros: 256 MiB held).
+  test::ScratchDir dir;
+  const auto error_of = [](const std::filesystem::path& path) -> std::string {
+    try {
+      (void)CanopyOccupancyMap::Load(path);
+    } catch (const OccupancyMapError& e) {
+      return e.what();
+    }
+    return "loaded";
+  };
+  ASSERT_EQ(::mkfifo((dir / "fifo.bt").c_str(), 0600), 0);
+  EXPECT_THAT(error_of(dir / "fifo.bt"), HasSubstr("fifo.bt': is a FIFO (named pipe), not a regular file"));
+  EXPECT_THAT(error_of("/dev/zero"), HasSubstr("is a character device, not a regular file"));
+  std::filesystem::create_directories(dir / "folder.bt");
+  EXPECT_THAT(error_of(dir / "folder.bt"), HasSubstr("folder.bt': is a directory, not a regular file"));
+  EXPECT_THAT(error_of(dir / "absent.bt"), HasSubstr("absent.bt': cannot open OctoMap file: No such file or directory"));
+  std::ofstream(dir / "big.bt") << "# Octomap OcTree binary file";
+  std::filesystem::resize_file(dir / "big.bt", kMaxOctoMapFileBytes + 1);  // sparse: zeros, no newline
+  EXPECT_THAT(error_of(dir / "big.bt"), HasSubstr("big.bt': is larger than the limit of 256 MiB (OctoMap file)"));
 }
 
 TEST(CanopyOccupancyMap, QueriesOutsideTheMapAndBadQueries) {

@@ -95,6 +95,25 @@ TEST(CheckPcdFile, AShortOrLongAsciiLineIsAnErrorWithItsLineNumber) {
   EXPECT_EQ(PcdError(four + "1 2 3 4\r\n\n  1 2 3 4\n"), "accepted");  // blank lines and CRLF are fine
 }
 
+TEST(CheckPcdFile, ALineOfWhiteSpaceIsRefusedNotReadAsAPointOfZeros) {
+  // PCL skips only empty lines: "  " or "\r" became a point (0, 0, 0) and the last point was lost.
+  EXPECT_EQ(PcdError(PcdHeader("1 1 1", 2, "ascii") + "  \n1 2 3\n4 5 6\n"),
+            "point cloud 't.pcd': line 12: white space only (PCL would read it as a point of zeros; remove the line)");
+  EXPECT_THAT(PcdError(PcdHeader("1 1 1", 2, "ascii") + "1 2 3\r\n\r\n4 5 6\r\n"), HasSubstr("line 13: white space only"));
+  EXPECT_EQ(PcdError(PcdHeader("1 1 1", 2, "ascii") + "1 2 3\n\n4 5 6\n"), "accepted");  // an empty line is skipped
+}
+
+TEST(CheckPointCloudFiles, AnAsciiLineIsRefusedAfter1MiBNotReadWhole) {
+  // Issue 26 sibling: PCL reads an ASCII line whole; a 1 GiB line of spaces took 2.2 GB and read
+  // as a point of zeros. Here 2 MiB of spaces before the values of a point.
+  const std::string spaces(std::size_t{2} << 20, ' ');
+  EXPECT_EQ(PcdError(PcdHeader("1 1 1", 1, "ascii") + spaces + "1 2 3\n"),
+            "point cloud 't.pcd': line 12 is longer than 1048576 bytes");
+  EXPECT_EQ(PlyError(PlyHeader("ascii", 1) + spaces + "1 2 3\n"), "point cloud 't.ply': line 8 is longer than 1048576 bytes");
+  const std::string at_limit = std::string(kMaxAsciiLineBytes - 5, ' ') + "1 2 3";
+  EXPECT_EQ(PcdError(PcdHeader("1 1 1", 1, "ascii") + at_limit + "\n"), "accepted");
+}
+
 TEST(CheckPcdFile, RefusesMalformedHeaders) {
   EXPECT_THAT(PcdError("FIELDS x y z\nSIZE 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\nDATA ascii\n1 2 3\n"),
               HasSubstr("SIZE gives 2 sizes for 3 FIELDS"));

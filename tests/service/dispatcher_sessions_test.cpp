@@ -7,7 +7,12 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
 
 namespace rowloc::service::test {
 namespace {
@@ -154,6 +159,90 @@ TEST(DispatcherSessions, AnUnterminatedLastJournalLineIsCutOnResume) {
   EXPECT_EQ(second.ResumeJournals(problems), 1u);
   ASSERT_EQ(problems.size(), 1u);
   EXPECT_NE(problems[0].find("unterminated"), std::string::npos);
+}
+
+/// A journal directory with the session "tiles" left open after 50 messages (as a kill -9 leaves it).
+ServiceSettings JournalWithOpenSession(const rowloc::test::ScratchDir& dir) {
+  ServiceSettings settings = SourceTreeSettings();
+  settings.journal_dir = dir.path();
+  Dispatcher first(settings);
+  TestClient client(first);
+  client.Send(OpenTilesSession("tiles"));
+  Stream(client, "tiles", 1, 50);
+  return settings;
+}
+
+/// The problems of resuming the journals of `settings` (none resumed).
+std::vector<std::string> ResumeProblems(const ServiceSettings& settings) {
+  Dispatcher second(settings);
+  std::vector<std::string> problems;
+  EXPECT_EQ(second.ResumeJournals(problems), 0u);
+  return problems;
+}
+
+TEST(DispatcherSessions, AJournalThatIsNotARegularFileIsNotResumed) {
+  // Issue 26: a FIFO in the journal's place hung the server's start (it never listened), and
+  // /dev/zero took memory until the server was killed (2.2 GB in 5 s).
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings settings = JournalWithOpenSession(dir);
+  std::filesystem::remove(dir / "tiles.ndjson");
+  ASSERT_EQ(::mkfifo((dir / "tiles.ndjson").c_str(), 0600), 0);
+  std::vector<std::string> problems = ResumeProblems(settings);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0], "tiles: not resumed: " + (dir / "tiles.ndjson").string() +
+                             ": the journal is not a regular file (a FIFO, a device or a directory)");
+  std::filesystem::remove(dir / "tiles.ndjson");
+  std::filesystem::create_symlink("/dev/zero", dir / "tiles.ndjson");
+  problems = ResumeProblems(settings);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("the journal is not a regular file"), std::string::npos) << problems[0];
+}
+
+TEST(DispatcherSessions, AJournalLineIsReadOnlyUpToTheLargestLineLimit) {
+  // A line no server writes (longer than any max_line_bytes) is refused once 64 MiB of it are read,
+  // never held whole: the session is not resumed.
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings settings = JournalWithOpenSession(dir);
+  const std::string imu = R"({"type":"imu","t":0.5,"sensor":"imu","accel_x_mps2":0,"accel_y_mps2":0,"gyro_z_radps":0})";
+  std::ofstream(dir / "tiles.ndjson", std::ios::app) << imu << std::string(kMaxLineBytesLimit, ' ') << "\n";
+  const std::vector<std::string> problems = ResumeProblems(settings);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0], "tiles: not resumed: " + (dir / "tiles.ndjson").string() +
+                             ":51: line longer than 64 MiB (the largest max_line_bytes)");
+}
+
+TEST(DispatcherSessions, AJournalsMetadataIsBoundedInSizeAndDepth) {
+  // Metadata nested a million levels deep overflowed the stack when the session was rebuilt.
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings settings = JournalWithOpenSession(dir);
+  std::ofstream(dir / "tiles.session.json", std::ios::trunc)
+      << R"({"session":"tiles","vehicle":"x","vehicle_config":)" << std::string(1000000, '[')
+      << std::string(1000000, ']') << "}";
+  std::vector<std::string> problems = ResumeProblems(settings);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0], "tiles: not resumed: session metadata nested deeper than 64 levels");
+  std::filesystem::resize_file(dir / "tiles.session.json", (std::uintmax_t{128} << 20) + 1);  // sparse
+  problems = ResumeProblems(settings);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("is larger than the limit of 128 MiB (session metadata)"), std::string::npos)
+      << problems[0];
+}
+
+TEST(DispatcherSessions, ALongUnterminatedJournalTailIsCutInBlocks) {
+  // The cut of an unterminated last line read the journal back one byte per system call: 7 s for a
+  // 20 MiB tail, minutes for a journal of max_journal_bytes, before the server listened.
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings settings = JournalWithOpenSession(dir);
+  const std::uintmax_t size = std::filesystem::file_size(dir / "tiles.ndjson");
+  std::filesystem::resize_file(dir / "tiles.ndjson", size + (std::uintmax_t{64} << 20));  // 64 MiB of zeros, no "\n"
+  Dispatcher second(settings);
+  std::vector<std::string> problems;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_EQ(second.ResumeJournals(problems), 1u);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0], "tiles: cut an unterminated last line of 67108864 bytes (never acknowledged)");
+  EXPECT_EQ(std::filesystem::file_size(dir / "tiles.ndjson"), size);
 }
 
 TEST(DispatcherSessions, ClosingAClientEndsItsSubscriptions) {

@@ -10,6 +10,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <fstream>
 
@@ -118,6 +120,57 @@ TEST_F(DispatcherTest, NamesThatAreLinksOutOfTheirDirectoryAreRefused) {
   const json vehicles = client.Send({{"type", "list_vehicles"}});
   ASSERT_EQ(vehicles["vehicles"].size(), 1u);  // the link is not offered either
   EXPECT_EQ(vehicles["vehicles"][0]["name"], "differential");
+}
+
+TEST_F(DispatcherTest, FilesOfItsDirectoriesThatCannotBeReadAreRefusedUnread) {
+  // Issue 26: a FIFO or a device in the vehicles, filters or maps directory must not hang or exhaust
+  // the server; a file nested a million levels deep must not overflow its stack (dumping the vehicle
+  // recursed once per level). Each is refused with invalid_config saying why, and the server goes on.
+  rowloc::test::ScratchDir dir;
+  for (const char* sub : {"vehicles", "filters", "maps"}) std::filesystem::create_directories(dir / sub);
+  std::filesystem::copy_file(rowloc::test::SourceDir() / "config/vehicles/differential.json",
+                             dir / "vehicles/differential.json");
+  ASSERT_EQ(::mkfifo((dir / "vehicles/fifo.json").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "filters/fifo.json").c_str(), 0600), 0);
+  ASSERT_EQ(::mkfifo((dir / "maps/fifo.geojson").c_str(), 0600), 0);
+  std::filesystem::create_directories(dir / "vehicles/folder.json");
+  std::ofstream(dir / "vehicles/deep.json") << "{\"name\":" << std::string(1000000, '[') << std::string(1000000, ']')
+                                            << "}";
+  std::ofstream(dir / "vehicles/big.json") << "{}";
+  std::filesystem::resize_file(dir / "vehicles/big.json", std::uintmax_t{5} << 20);
+  ServiceSettings settings = SourceTreeSettings();
+  settings.vehicles_dir = dir / "vehicles";
+  settings.filters_dir = dir / "filters";
+  settings.maps_dir = dir / "maps";
+  Dispatcher dispatcher(settings);
+  TestClient client(dispatcher);
+  const json origin = {{"latitude_deg", 45.0}, {"longitude_deg", 7.0}, {"altitude_m", 200.0}};
+  const auto refusal = [&](const json& names) {
+    json request{{"type", "open_session"}, {"origin", origin}};
+    request.update(names);
+    const std::vector<std::string> replies = client.SendRaw(request.dump());
+    EXPECT_EQ(replies.size(), 1u);
+    const json reply = replies.empty() ? json() : json::parse(replies.front());
+    EXPECT_EQ(reply["code"], "invalid_config") << reply.dump();
+    return reply["message"].is_string() ? reply["message"].get<std::string>() : std::string();
+  };
+  EXPECT_EQ(refusal({{"vehicle", "fifo"}}), "vehicle 'fifo' (fifo.json): is a FIFO (named pipe), not a regular file");
+  EXPECT_EQ(refusal({{"vehicle", "differential"}, {"filter", "fifo"}}),
+            "filter 'fifo' (fifo.json): is a FIFO (named pipe), not a regular file");
+  EXPECT_NE(refusal({{"vehicle", "differential"}, {"map", "fifo"}}).find("is a FIFO (named pipe), not a regular file"),
+            std::string::npos);
+  EXPECT_EQ(refusal({{"vehicle", "folder"}}), "vehicle 'folder' (folder.json): is a directory, not a regular file");
+  EXPECT_EQ(refusal({{"vehicle", "big"}}), "vehicle 'big' (big.json): is larger than the limit of 4 MiB (vehicle file)");
+  EXPECT_EQ(refusal({{"vehicle", "deep"}}), "vehicle 'deep': arrays and objects nested deeper than 64 levels");
+  // Listed with their errors, not hanging the listing; the good vehicle still opens.
+  const json vehicles = client.Send({{"type", "list_vehicles"}});
+  ASSERT_EQ(vehicles["vehicles"].size(), 5u) << vehicles.dump();
+  for (const json& vehicle : vehicles["vehicles"]) {
+    EXPECT_EQ(vehicle.contains("error"), vehicle["name"] != "differential") << vehicle.dump();
+  }
+  EXPECT_EQ(client.Send({{"type", "list_maps"}})["maps"][0]["name"], "fifo");
+  EXPECT_EQ(client.Send({{"type", "open_session"}, {"vehicle", "differential"}, {"origin", origin}})["type"],
+            "session_opened");
 }
 
 TEST_F(DispatcherTest, SessionsOpenListStreamAndClose) {

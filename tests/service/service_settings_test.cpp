@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <fstream>
 
 namespace rowloc::service {
@@ -108,6 +110,32 @@ TEST(ServiceSettings, TokenIsTheFirstLineAndMustNotBeEmpty) {
   EXPECT_THROW(ReadToken(dir / "empty"), ServiceSettingsError);
   std::ofstream(dir / "big") << std::string(5000, 'x');
   EXPECT_THROW(ReadToken(dir / "big"), ServiceSettingsError);
+}
+
+TEST(ServiceSettings, OnlyRegularSettingsAndTokenFilesAreRead) {
+  // Checked on the opened file (mapio::ReadInputFile), saying what the file is; a FIFO without a
+  // writer is refused without waiting for one.
+  rowloc::test::ScratchDir dir;
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  const auto error_of = [](const auto& read) -> std::string {
+    try {
+      read();
+    } catch (const ServiceSettingsError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_EQ(error_of([&] { LoadServiceSettings(dir / "fifo"); }),
+            (dir / "fifo").string() + ": is a FIFO (named pipe), not a regular file");
+  EXPECT_EQ(error_of([&] { ReadToken(dir / "fifo"); }),
+            (dir / "fifo").string() + ": is a FIFO (named pipe), not a regular file");
+  EXPECT_EQ(error_of([] { LoadServiceSettings("/dev/zero"); }), "/dev/zero: is a character device, not a regular file");
+  EXPECT_EQ(error_of([&] { LoadServiceSettings(dir.path()); }),
+            dir.path().string() + ": is a directory, not a regular file");
+  std::ofstream(dir / "big.json") << "{}";
+  std::filesystem::resize_file(dir / "big.json", (std::size_t{1} << 20) + 1);
+  EXPECT_EQ(error_of([&] { LoadServiceSettings(dir / "big.json"); }),
+            (dir / "big.json").string() + ": is larger than the limit of 1 MiB (settings file)");
 }
 
 }  // namespace

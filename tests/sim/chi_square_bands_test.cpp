@@ -1,4 +1,4 @@
-// Chi-square bands of the consistency tests: tabulated quantiles, the seed 004 numbers
+// Chi-square bands of the consistency tests: tabulated quantiles, the Lindgren et al. 2002 numbers
 // (Eqs. 43-44 and the whiteness band after Eq. 42), properties and bad arguments.
 #include "rowloc/sim/chi_square_bands.hpp"
 
@@ -40,11 +40,11 @@ TEST(ChiSquareInterval, HoldsTheRequestedProbability) {
 }
 
 TEST(TimeAveragedBand, ReproducesSeed004) {
-  // Seed 004: K = 1099 innovations of dimension 2 at 5 % significance: 1.8831 .. 2.1204 (Eq. 44).
+  // Lindgren et al. 2002: K = 1099 innovations of dimension 2 at 5 % significance: 1.8831 .. 2.1204 (Eq. 44).
   const ChiSquareBand b = TimeAveragedBand(2.0 * 1099, 1099);
   EXPECT_NEAR(b.lower, 1.8831, 5e-4);
   EXPECT_NEAR(b.upper, 2.1204, 5e-4);
-  // SPEC §9 quotes 1.88 - 2.12.
+  // The same band rounded: 1.88 - 2.12.
   EXPECT_NEAR(b.lower, 1.88, 5e-3);
   EXPECT_NEAR(b.upper, 2.12, 5e-3);
 }
@@ -68,7 +68,7 @@ TEST(TimeAveragedBand, IsThePerSampleIntervalForOneSampleAndShrinksAroundTheDof)
 }
 
 TEST(WhitenessBand, IsOnePointNineSixOverRootK) {
-  EXPECT_NEAR(WhitenessBandHalfWidth(1099), 1.96 / std::sqrt(1099.0), 1e-5);  // seed 004
+  EXPECT_NEAR(WhitenessBandHalfWidth(1099), 1.96 / std::sqrt(1099.0), 1e-5);  // Lindgren et al. 2002
   EXPECT_NEAR(WhitenessBandHalfWidth(1), 1.959964, 1e-6);
   EXPECT_NEAR(WhitenessBandHalfWidth(100, 0.99), 2.575829 / 10.0, 1e-6);
 }

@@ -59,7 +59,7 @@ TEST(ShuttleRouteTest, LegsAlternateDirectionAndEndWhereExpected) {
   const double leg = 20.0, heading = 0.25;
   const Eigen::Vector2d start(5.0, 6.0);
   for (const double transition : {0.0, 2.5}) {
-  for (const double radius : {4.0, -4.0}) {  // -4: first turn right, as in seed 004
+  for (const double radius : {4.0, -4.0}) {  // -4: first turn right, as in Lindgren et al. 2002
     const RouteSpec spec = ShuttleRoute(start, heading, leg, 5, radius, 1.0, 1.0, transition);
     ASSERT_EQ(spec.pieces.size(), transition == 0.0 ? 9u : 17u);
     const Route route(spec);
@@ -317,7 +317,7 @@ TEST(ParseRouteSpecTest, PiecesTypeEqualsTheSpecBuiltByHand) {
 }
 
 TEST(ParseRouteSpecTest, PiecesFigureOfEightEndsWhereGeometrySays) {
-  // Seed 004: 1.5 loops clockwise, then 1.5 loops anticlockwise, on a 4 m radius: two arcs.
+  // Lindgren et al. 2002: 1.5 loops clockwise, then 1.5 loops anticlockwise, on a 4 m radius: two arcs.
   const double radius = 4.0, heading = 0.3;
   const double loops_m = 1.5 * 2.0 * kPi * radius;
   const Eigen::Vector2d start(2.0, 3.0);

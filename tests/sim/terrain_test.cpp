@@ -59,7 +59,7 @@ TEST(TerrainSlipTableTest, ShippedFileEqualsDefaults) {
   EXPECT_EQ(ParseTerrainSlipTable(ValidJson(), "inline"), TerrainSlipTable::Defaults());
 }
 
-// SPEC §9 / seed 000 ch. 7: steady slip at constant speed, tiles <= 0.01, grass 0.116-0.135,
+// Danzi 2026 ch. 7: steady slip at constant speed, tiles <= 0.01, grass 0.116-0.135,
 // gravel 0.122-0.146; mud larger than both.
 TEST(TerrainSlipTableTest, DefaultsReproduceAgriMaRoSteadySlip) {
   const auto table = TerrainSlipTable::Defaults();

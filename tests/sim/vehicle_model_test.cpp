@@ -181,7 +181,7 @@ TEST(VehicleModel, DifferentialDriveCannotMoveSideways) {
   EXPECT_THAT(model.MotionProblem(BodyMotion{.v_x_mps = 1.0, .dv_y_mps2 = 0.1}).value_or(""),
               HasSubstr("cannot accelerate sideways"));
   EXPECT_EQ(model.MotionProblem(BodyMotion{.v_x_mps = 1.0, .yaw_rate_radps = 0.5}), std::nullopt);
-  // Turning: wheel speeds follow the DWR kinematics of seed 001 eq. (2) on tiles (tiny slip).
+  // Turning: wheel speeds follow the DWR kinematics of Tazzari et al. n.d. eq. (2) on tiles (tiny slip).
   const auto wheels =
       model.Wheels(BodyMotion{.v_x_mps = 1.0, .yaw_rate_radps = 0.5}, All(model, TerrainClass::kTiles));
   EXPECT_DOUBLE_EQ(wheels[0].longitudinal_speed_mps, 1.0 - 0.5 * 0.28);
@@ -252,7 +252,7 @@ TEST(VehicleModel, ImuSpecificForceMatchesDifferentiatedWorldVelocity) {
     const Eigen::Vector2d body_accel = Eigen::Rotation2Dd(-heading0) * world_accel;
     EXPECT_NEAR((model.ImuSpecificForce(m) - body_accel).norm(), 0.0, 1e-8);
   }
-  // SPEC §10: at the reference point a_Bx = dv_x/dt - yaw_rate v_y, a_By = dv_y/dt + yaw_rate v_x.
+  // Danzi 2026 eqs. (4.24)-(4.25): at the reference point a_Bx = dv_x/dt - yaw_rate v_y, a_By = dv_y/dt + yaw_rate v_x.
   const BodyMotion m{.v_x_mps = 1.0, .v_y_mps = 0.2, .yaw_rate_radps = 0.5, .dv_x_mps2 = 0.1, .dv_y_mps2 = 0.3};
   EXPECT_TRUE(PointAcceleration(m, Eigen::Vector2d::Zero()).isApprox(Eigen::Vector2d(0.1 - 0.1, 0.3 + 0.5)));
 }
@@ -304,7 +304,7 @@ TEST(VehicleModel, TrackSlipsReproduceTheCommandedMotionThroughSeed001Eq3) {
     EXPECT_NEAR((eta_r * v_r - eta_l * v_l) / (2.0 * d), m.yaw_rate_radps, 1e-12);
     for (const WheelTruth& track : tracks) {
       if (std::abs(track.longitudinal_speed_mps) < 0.05) continue;
-      // Seed 001 eq. (6): i = 1 - V_t / (omega r).
+      // Tazzari et al. n.d. eq. (6): i = 1 - V_t / (omega r).
       EXPECT_NEAR(track.slip, 1.0 - track.longitudinal_speed_mps / (track.wheel_angular_speed_radps * 0.15), 1e-12);
     }
     ++checked;

@@ -91,7 +91,7 @@ TEST(JanosiHanamotoCurveTest, TendsToTractionMaximum) {
 
 TEST(JanosiHanamotoCurveTest, SlopeMatchesNumericDerivative) {
   const JanosiHanamotoCurve curve(0.8, 0.1);
-  // At zero the slope is k_s = mu_max / (2B) (seed 004 eq. (23)).
+  // At zero the slope is k_s = mu_max / (2B) (Lindgren et al. 2002 eq. (23)).
   EXPECT_NEAR(curve.Slope(0.0), 0.8 / (2.0 * 0.1), 1e-15);
   // Across 0 the odd extension mu = mu_max (s/(2B) - s|s|/(6B^2) + ...) makes the central
   // difference low by mu_max h/(6B^2) = 1.3e-5 at h = 1e-6.
@@ -156,7 +156,7 @@ struct RunSummary {
   double peak_abs_slip = 0.0;
 };
 
-// Point-mass vehicle with a PI speed controller tracking a 1 m/s^2 ramp to 1 m/s (seed 000 ch. 7),
+// Point-mass vehicle with a PI speed controller tracking a 1 m/s^2 ramp to 1 m/s (Danzi 2026 ch. 7),
 // held until t_end; the slip is averaged over the last `average_s` seconds.
 RunSummary DriveRampAndHold(const LongitudinalWheelDynamics& wheel, double t_end_s, double average_s) {
   constexpr double kDt = 0.01;

@@ -1,6 +1,6 @@
 // Test-only brute-force reference: the minimum-volume ellipsoid containing a slab of the unit ball,
 //   K = { u in R^n : |u| <= 1, lo <= u1 <= hi },   -1 <= lo < hi <= 1,
-// found by numerical search, independently of the closed-form cut formulas (SPEC §4, docs/ellipsoid.md).
+// found by numerical search, independently of the closed-form cut formulas (docs/ellipsoid.md).
 //
 // Every cut reduces to this case: map E to the unit ball (u = L^-1 (x - c)) and the cut normal to e1.
 // K is a body of revolution about e1 and its minimum-volume (Löwner) ellipsoid is unique, hence also

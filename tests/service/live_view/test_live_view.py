@@ -9,7 +9,12 @@ the page reconnects when the service restarts. No timing thresholds: every wait 
 generous deadline that only fails a test that would otherwise hang.
 
 Environment: ROWLOC_BIN, ROWLOC_SOURCE_DIR, PYTHONPATH with service/python; CHROMIUM (default
-`chromium`); LIVE_VIEW_SCREENSHOT: where to save the screenshot (docs/images/live-view.png).
+`chromium`); LIVE_VIEW_SCREENSHOT: where to save the screenshot (CTest: the build tree; the picture in
+the docs is taken by hand from scripts/demo, docs/live-view.md).
+
+The drive is simulated from config/scenarios/vineyard-002-4us.json and its world's true row map
+(the simulator's row-map.geojson) is the map the sessions get, as MAP from a maps directory of its
+own: the vehicle drives in the lanes of the rows it sees and the echoes meet them.
 """
 
 import base64
@@ -33,26 +38,32 @@ ROWLOC = os.environ.get("ROWLOC_BIN")
 SRC = os.environ.get("ROWLOC_SOURCE_DIR")
 CHROMIUM = os.environ.get("CHROMIUM", "chromium")
 SCREENSHOT = os.environ.get("LIVE_VIEW_SCREENSHOT")
-VEHICLE, MAP = "vineyard-ugv-4ws", "sample-vineyard"
+SCENARIO = "vineyard-002-4us"       # config/scenarios: five lanes of the world vineyard-002
+VEHICLE, MAP = "vineyard-ugv-4ws", "vineyard-002"  # the scenario's vehicle; its world's true row map
+ROWS = 6                  # the rows of MAP (config/worlds/vineyard-002.json)
 INITIALISED_AFTER = 6000  # the filter initialises from GNSS at message 4069 (t = 16.6 s)
 DEADLINE_S = 120          # a wait that has not ended by then is a hang
 
 _TMP = None
 HEADER, LINES = None, None
+MAPS = None  # the maps directory of the servers: MAP only
 
 
 def setUpModule():
-    global _TMP, HEADER, LINES
+    global _TMP, HEADER, LINES, MAPS
     if not ROWLOC or not SRC:
         raise unittest.SkipTest("set ROWLOC_BIN and ROWLOC_SOURCE_DIR")
     _TMP = tempfile.mkdtemp(prefix="rowloc-live-view-")
     run = os.path.join(_TMP, "sim")
-    r = subprocess.run([ROWLOC, "simulate", os.path.join(SRC, "config", "scenarios", "vineyard-002-4us.json"),
+    r = subprocess.run([ROWLOC, "simulate", os.path.join(SRC, "config", "scenarios", SCENARIO + ".json"),
                         "-o", run, "--no-baselines"], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=600)
     if r.returncode != 0:
         raise RuntimeError("rowloc simulate failed:\n" + r.stdout.decode(errors="replace")[-3000:])
     HEADER, LINES = read_log(os.path.join(run, "sensors.ndjson"))
     LINES = LINES[:20000]
+    MAPS = os.path.join(_TMP, "maps")
+    os.mkdir(MAPS)
+    shutil.copyfile(os.path.join(run, "row-map.geojson"), os.path.join(MAPS, MAP + ".geojson"))
 
 
 def tearDownModule():
@@ -73,12 +84,12 @@ def wait_until(condition, what, deadline_s=DEADLINE_S):
 
 
 class Server:
-    """`rowloc serve --port 0 --http-port PORT` with the shipped vehicles, maps and filters."""
+    """`rowloc serve --port 0 --http-port PORT` with the shipped vehicles and filters and the drive's map."""
 
     def __init__(self, http_port=0, extra=()):
         self.proc = subprocess.Popen(
             [ROWLOC, "serve", "--port", "0", "--http-port", str(http_port),
-             "--vehicles", os.path.join(SRC, "config", "vehicles"), "--maps", os.path.join(SRC, "maps"),
+             "--vehicles", os.path.join(SRC, "config", "vehicles"), "--maps", MAPS,
              "--filters", os.path.join(SRC, "config", "filters"), *extra],
             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
         ready, _, _ = select.select([self.proc.stdout], [], [], DEADLINE_S)
@@ -189,7 +200,7 @@ class HttpEndpointTest(unittest.TestCase):
         self.assertEqual(seen["subscribed"][0]["stream"], "live")
         scene = seen["scene"][0]
         self.assertEqual((scene["session"], scene["map"], scene["vehicle"]["name"]), ("drive", MAP, VEHICLE))
-        self.assertEqual(len(scene["rows"]), 10)  # the sample vineyard's rows (maps/README)
+        self.assertEqual(len(scene["rows"]), ROWS)  # the rows of the world the drive was simulated in
         self.assertEqual(len(scene["vehicle"]["ultrasonic"]), 4)
         self.assertTrue(seen["gnss"], "no GNSS fix reached the client")
         for fix in seen["gnss"]:
@@ -341,6 +352,8 @@ class BrowserTest(unittest.TestCase):
             # The drive goes on while the page watches (5 times real time: fixes and echoes arrive live).
             stream_log(c, "vineyard-drive", LINES, rate=5.0, start=INITIALISED_AFTER, count=4000)
             expected = c.get_state("vineyard-drive")
+            # The drive belongs to the map: the vehicle is in a lane and the map-aided update uses the echoes.
+            self.assertGreater(expected["health"]["sensors"]["ultrasonic"]["accepted"], 0)
             shown = wait_until(lambda: (lambda s: s if s.get("t") == f"{expected['t']:.3f}" else None)(browser.shown()),
                                "the page to show the session's state")
             self.assertEqual(shown["session"], "vineyard-drive")
@@ -348,7 +361,7 @@ class BrowserTest(unittest.TestCase):
             for key, value, digits in (("x", expected["x_m"], 3), ("y", expected["y_m"], 3),
                                        ("phi", expected["phi_rad"], 4)):
                 self.assertEqual(shown[key], f"{value:.{digits}f}", key)
-            self.assertEqual(shown["rows-drawn"], "10")
+            self.assertEqual(shown["rows-drawn"], str(ROWS))
             self.assertGreater(int(shown["gnss-total"]), 0)
             self.assertGreater(int(shown["echoes-total"]), 0)
             self.assertGreater(int(shown["trail-drawn"]), 10)

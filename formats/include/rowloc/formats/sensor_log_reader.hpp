@@ -29,6 +29,7 @@
 // in speed_radps)". Nested keys are joined with '.'; whole-line problems use the subject "line".
 #pragma once
 
+#include "rowloc/formats/bounded_line_reader.hpp"
 #include "rowloc/formats/sensor_messages.hpp"
 
 #include <nlohmann/json_fwd.hpp>
@@ -44,7 +45,7 @@
 namespace rowloc::formats {
 
 /// Longest accepted line, terminator excluded (docs/protocol.md: "at most 1 MiB per line").
-inline constexpr std::size_t kMaxLogLineBytes = std::size_t{1} << 20;
+inline constexpr std::size_t kMaxLogLineBytes = kMaxProtocolLineBytes;
 /// Most wheel (or track) names in a log header (docs/protocol.md §1; a vehicle file has at most 16).
 inline constexpr std::size_t kMaxLogWheels = 64;
 /// Most ultrasonic sensor names in a log header (docs/protocol.md §1; a vehicle file has at most 64).
@@ -95,7 +96,7 @@ class SensorLogReader {
   std::optional<SensorMessage> Next();
 
   /// 1-based number of the last line read (0 before any).
-  std::size_t line_number() const { return line_number_; }
+  std::size_t line_number() const { return lines_.line_number(); }
   /// Messages returned by Next() so far.
   std::size_t messages_read() const { return messages_read_; }
   /// False after a read error of the stream (Next() would fail again): a SensorLogError is then
@@ -103,19 +104,15 @@ class SensorLogReader {
   bool readable() const { return !in_.bad(); }
 
  private:
-  enum class LineEnd { kNewline, kUnterminated, kTooLong, kEndOfStream };
-
   /// Reads the next non-empty line into `line` (terminator removed); false at the end of the stream.
+  /// A line longer than kMaxLogLineBytes is refused after its first kMaxLogLineBytes + 2 bytes; the
+  /// next call skips its rest without storing it (BoundedLineReader).
   bool ReadLine(std::string& line);
-  /// Reads one line, holding at most kMaxLogLineBytes + 2 bytes of it: a longer line returns
-  /// kTooLong with its rest unread (ReadLine skips it on the next call, without storing it).
-  LineEnd ReadBoundedLine(std::string& line);
   LogHeader ReadHeader();
 
   std::istream& in_;
   std::string source_;
-  std::size_t line_number_ = 0;
-  bool skip_rest_of_line_ = false;  ///< the last line read was too long: its rest is still in in_
+  BoundedLineReader lines_;
   LogHeader header_;  // after the members ReadHeader() uses: initialized by it
   double last_time_s_ = -std::numeric_limits<double>::infinity();
   std::size_t messages_read_ = 0;

@@ -5,7 +5,9 @@
 // (`truth_header` with protocol "rowloc-truth/<major>[.<minor>]", or `estimate_header` with
 // "rowloc-estimate/<major>[...]"); only major version 1 is accepted. Unknown keys are ignored;
 // lines of an unknown `type` are skipped and counted (never silently: the count is returned).
-// Blank lines are skipped. Every other defect is a StreamFormatError whose message names the
+// Blank lines are skipped; the last line may lack its "\n". A line longer than 1 MiB
+// (kMaxProtocolLineBytes) is refused once its first 1 MiB + 2 bytes are read, never held whole
+// (bounded_line_reader.hpp). Every other defect is a StreamFormatError whose message names the
 // file, the 1-based line number and the key: malformed JSON, a missing required key, a wrong
 // type, a non-finite number, a truth rolling radius <= 0, a `wheel_calibration` entry out of its
 // domain (R_w <= 0, negative kappa or sigma), an estimate covariance that is not symmetric positive semi-definite

@@ -1,4 +1,4 @@
-// Cone cast (SPEC §4, "Planar geometry"): the nearest point of a segment inside a 2-D sector.
+// Cone cast (docs/planar-geometry.md): the nearest point of a segment inside a 2-D sector.
 // An ultrasonic echo comes from the nearest reflecting point inside the beam, not from the beam
 // axis, so the measured range is
 //   r*(S, C) = min { |x - apex| : x in S ∩ C },

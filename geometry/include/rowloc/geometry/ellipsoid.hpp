@@ -1,4 +1,4 @@
-// Ellipsoid E(c, P) = { x : (x - c)^T P^-1 (x - c) <= 1 }, P symmetric positive definite (SPEC §3, §4).
+// Ellipsoid E(c, P) = { x : (x - c)^T P^-1 (x - c) <= 1 }, P symmetric positive definite (docs/ellipsoid.md).
 //
 // P is the "shape matrix": for a Gaussian N(c, S) the k-sigma ellipsoid is P = k^2 S
 // (FromCovariance). With the Cholesky factor P = L L^T, E = { c + L u : |u| <= 1 } is the image of
@@ -8,7 +8,7 @@
 // The projection of E onto a coordinate subspace is E(c_I, P_II), the principal submatrix: the
 // support function h(y) = y^T c + sqrt(y^T P y) restricted to y supported on I only involves P_II.
 // (The Schur complement P_II - P_IJ P_JJ^-1 P_JI is the slice of E through c: smaller, wrong as a
-// bound; seed 002 writes the definition with P instead of P^-1: both are errata, SPEC §10.)
+// bound; Donati 2021 writes the definition with P instead of P^-1: both are its errata, not copied.)
 //
 // The cuts (central, deep, parallel) live in ellipsoid_cuts.hpp; the math is in docs/ellipsoid.md.
 #pragma once
@@ -85,7 +85,7 @@ class Ellipsoid {
     }
   }
 
-  /// The k-sigma ellipsoid of N(mean, covariance): P = k_sigma^2 * covariance (SPEC §3).
+  /// The k-sigma ellipsoid of N(mean, covariance): P = k_sigma^2 * covariance.
   /// Throws std::invalid_argument if k_sigma is not finite and > 0, or as the constructor.
   static Ellipsoid FromCovariance(const Vector& mean, const Matrix& covariance, double k_sigma) {
     if (!std::isfinite(k_sigma) || k_sigma <= 0.0) {

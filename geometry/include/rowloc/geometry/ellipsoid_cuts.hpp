@@ -1,24 +1,24 @@
 // Minimum-volume ellipsoids containing E ∩ {cut}: central, deep and parallel (slab) cuts
-// (SPEC §4; seed 002 ch. 3, eqs. (3.2)-(3.12), after Liao & Todd 1993 for the parallel cut).
+// (Donati 2021 ch. 3, eqs. (3.2)-(3.12), after Liao & Todd 1993 for the parallel cut).
 //
 // For a cut with normal g let s = sqrt(g^T P g) and w = P g / s. Every update has the form
 //   c+ = c - tau w,     P+ = delta (P - sigma w w^T) = delta (P - sigma (P g)(P g)^T / s^2).
-// NOTE: the shape update divides (P g)(P g)^T by s^2 = g^T P g. Seed 002, eqs. (3.3) and (3.12),
-// divides by s = sqrt(g^T P g): that is an erratum (SPEC §10) and gives a wrong, non-containing
+// NOTE: the shape update divides (P g)(P g)^T by s^2 = g^T P g. Donati 2021, eqs. (3.3) and (3.12),
+// divides by s = sqrt(g^T P g): that is an erratum (not copied) and gives a wrong, non-containing
 // ellipsoid whenever g^T P g != 1.
 //
 // Depths, in units of E along g: upper plane g^T x <= beta_hi: alpha = (g^T c - beta_hi) / s;
 // lower plane g^T x >= beta_lo: alpha_hat = (beta_lo - g^T c) / s. In the normalized frame
 // (E -> unit ball, g -> e1) the kept region is { |u| <= 1, alpha_hat <= u1 <= -alpha }.
 //   - depth >= 1 on either side: the cut leaves no interior point of E -> kEmpty (never clipped:
-//     clipping alpha > 1 to 1 would return a single point, SPEC §10).
+//     clipping alpha > 1 to 1, as Donati 2021 does, would return a single point).
 //   - depth < -1: that plane does not touch E -> treated as -1 (no constraint).
 //   - alpha * alpha_hat >= 1/n (both negative): E itself is the minimum -> kUnchanged.
 //   - otherwise (n >= 2), with rho = sqrt(4 (1 - a^2)(1 - ah^2) + n^2 (ah^2 - a^2)^2):
 //       sigma = (n + 2 [1 - n^2 (a + ah)^2 / 4] / (1 - a ah + rho / 2)) / (n + 1)
 //       tau   = sigma (a - ah) / 2
 //       delta = n^2 / (n^2 - 1) (1 - (a^2 + ah^2 - rho / n) / 2)
-//     The sigma above is SPEC §4's (n + 2 (1 - a ah - rho/2) / (a - ah)^2) / (n + 1) rationalized
+//     The sigma above is the published (n + 2 (1 - a ah - rho/2) / (a - ah)^2) / (n + 1) rationalized
 //     with (1 - a ah)^2 - rho^2 / 4 = (a - ah)^2 [1 - n^2 (a + ah)^2 / 4]: the same number, without
 //     the 0/0 at a == ah (a slab centred on c); at a = ah = -t it is (1 - n t^2) / (1 - t^2).
 //   - n = 1: delta = n^2 / (n^2 - 1) is undefined; the exact answer is the interval
@@ -149,7 +149,7 @@ CutResult<N> ApplyCut(const Ellipsoid<N>& e, const CutFrame<N>& frame, double al
   using Matrix = typename Ellipsoid<N>::Matrix;
   const Vector center = e.center() - p.tau * frame.w;
   const Matrix w_wt = frame.w * frame.w.transpose();
-  // Divided by s^2 (w w^T = (P g)(P g)^T / s^2), not by s as in seed 002 eq. (3.12): SPEC §10.
+  // Divided by s^2 (w w^T = (P g)(P g)^T / s^2), not by s as in Donati 2021 eq. (3.12), an erratum.
   Matrix shape_unsymmetric;
   bool precision_limited = false;
   if (e.dimension() > 1 && p.one_minus_sigma < kThinSlabOneMinusSigma) {

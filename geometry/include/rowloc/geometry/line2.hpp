@@ -1,6 +1,6 @@
-// Line2: an infinite line of the plane in normal form  n^T x = offset,  |n| = 1  (SPEC §4,
-// "Planar geometry"). The thesis writes rows as y = m x + q, which cannot represent a row along
-// the y axis (SPEC §10); the normal form represents every direction with the same formulas.
+// Line2: an infinite line of the plane in normal form  n^T x = offset,  |n| = 1  (see
+// docs/planar-geometry.md). Donati 2021 writes rows as y = m x + q, which cannot represent a row along
+// the y axis (an erratum, not copied); the normal form represents every direction with the same formulas.
 //
 // Math (x in metres, local ENU):
 //   signed distance  d(x) = n^T x - offset      (positive on the side n points to)

@@ -1,5 +1,5 @@
-// Polyline2: an open polyline or a closed polygon of the plane (a row of the row map, SPEC §3),
-// with the queries of segment2.hpp, ray_cast.hpp and cone_cast.hpp (SPEC §4, "Planar geometry").
+// Polyline2: an open polyline or a closed polygon of the plane (a row of the row map, row_map.hpp),
+// with the queries of segment2.hpp, ray_cast.hpp and cone_cast.hpp (docs/planar-geometry.md).
 //
 // Segment i joins vertex i to vertex i+1 (for a polygon the last segment joins the last vertex to
 // the first). Every query is the minimum over the segments of the per-segment query, so the

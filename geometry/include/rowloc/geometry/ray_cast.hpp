@@ -1,4 +1,4 @@
-// Ray cast against a segment (SPEC §4, "Planar geometry"): the first point of the segment [a, b]
+// Ray cast against a segment (docs/planar-geometry.md): the first point of the segment [a, b]
 // met by the ray { o + t d : 0 <= t <= max_range } with |d| = 1.
 //
 // Math: with e = b - a and w = a - o, o + t d = a + s e gives (cross(u, v) = u_x v_y - u_y v_x)

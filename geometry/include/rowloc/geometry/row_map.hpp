@@ -1,5 +1,5 @@
 // Row map: the crop rows of a field as 2-D polylines or closed polygons in a local
-// East-North-Up frame, plus the WGS84 origin of that frame (SPEC §3).
+// East-North-Up frame, plus the WGS84 origin of that frame (docs/map-format.md).
 //
 // A row is the outline of the canopy at the slice height h_ref above the terrain: either an
 // open polyline (one side of a row, or its centre line) or a closed polygon (the whole outline).

@@ -1,5 +1,5 @@
-// Segment2: the closed segment [a, b] = { a + s (b - a) : s in [0, 1] } of the plane (SPEC §4,
-// "Planar geometry"), coordinates in metres.
+// Segment2: the closed segment [a, b] = { a + s (b - a) : s in [0, 1] } of the plane (see
+// docs/planar-geometry.md), coordinates in metres.
 //
 // Math: with e = b - a, the closest point to x is a + s* e with s* = clamp((x - a)^T e / |e|^2, 0, 1);
 // the distance is |x - (a + s* e)|. A degenerate segment (a == b) is a point: its closest point

@@ -1,6 +1,6 @@
 // SegmentIndex: Boost.Geometry R-trees (R*, bulk-loaded) over the segments of a row map, so that
 // the segments near a point or a sensor beam are found in O(log N + k), not by a scan of N
-// segments (SPEC §4, "Planar geometry"; docs/planar-geometry.md).
+// segments (docs/planar-geometry.md).
 //
 // Queries and their exact semantics (the per-segment semantics are those of ray_cast.hpp and
 // cone_cast.hpp; ties in range or distance are broken by the lower entry index):

@@ -1,6 +1,6 @@
 // SegmentQueryCache: the results of a caller's recent R-tree box queries of a SegmentIndex, so that
-// a later query whose box lies inside a cached box is answered without the tree (SPEC §4, "Planar
-// geometry"; docs/planar-geometry.md). The map-aided filter casts the cones of a few sensors that
+// a later query whose box lies inside a cached box is answered without the tree (see
+// docs/planar-geometry.md). The map-aided filter casts the cones of a few sensors that
 // move a few centimetres between two echoes, so most of its queries repeat a neighbourhood.
 //
 // Exactness: for axis-aligned boxes Q ⊆ C, a segment's bounding box meets Q only if it meets C, so

@@ -1,5 +1,5 @@
 // Configuration of the vehicle EKF as data (issue 4, "Configuration ... from a file, with clear
-// errors"; SPEC §6). Vehicle geometry comes from the vehicle file (rowloc/mapio/vehicle_config.hpp);
+// errors"). Vehicle geometry comes from the vehicle file (rowloc/mapio/vehicle_config.hpp);
 // this file holds the noise figures, process noise, gates and options of the filter.
 //
 // Units and meaning (all 1-sigma; "per sqrt(Hz)" is a continuous white-noise spectral density q,
@@ -12,10 +12,10 @@
 //   process_noise.accel_bias_mps2_per_sqrt_hz      drives b_ax, b_ay (imu.estimate_accel_bias: the
 //                                                  bias and gravity on a slope that changes as the
 //                                                  vehicle drives)
-//   slip_aware_odometry.*_per_sqrt_m               seed 004: R_w and kappa random walks whose variance
+//   slip_aware_odometry.*_per_sqrt_m               Lindgren et al. 2002: R_w and kappa random walks whose variance
 //                                                  grows with the distance the wheel rolled
 // Gates are probabilities p: a measurement of dimension m is rejected when its NIS exceeds the
-// chi-square quantile Q(m, p) (SPEC §6 "chi-square gating of outliers").
+// chi-square quantile Q(m, p) (the design's "chi-square gating of outliers").
 //
 // File format (config/filters/*.json): every key required, unknown keys rejected, errors name the
 // source, the key path and the reason (the same strict reader as the simulator's files). Every
@@ -45,9 +45,9 @@ struct ProcessNoise {
   double accel_bias_mps2_per_sqrt_hz = 0.05;
 };
 
-/// Seed 004: rolling radius R_w and the torque/slip relation of every wheel as EKF states. The
+/// Lindgren et al. 2002: rolling radius R_w and the torque/slip relation of every wheel as EKF states. The
 /// relation is held as the slip compliance kappa = N r / k_s (slip per unit traction coefficient,
-/// dimensionless; k_s seed 004's torque/slip gradient, N r the wheel's static load times its nominal
+/// dimensionless; k_s Lindgren et al.'s torque/slip gradient, N r the wheel's static load times its nominal
 /// radius), not as k_s: see measurement_models.hpp and docs/localization-filter.md §5.2.
 struct SlipAwareOdometryConfig {
   bool enabled = true;
@@ -186,10 +186,10 @@ struct VioNoise {
 };
 
 /// How an ultrasonic echo updates the filter against the row map (map_aided_ranging.hpp; issue 5;
-/// SPEC §6 "Map-aided ultrasonic measurement" step 5).
+/// docs/map-aided-update.md).
 enum class MapAidedMethod {
   kRange,               ///< "range": EKF update of the measured range against the row line (consistent)
-  kEllipsoidCut,        ///< "ellipsoid_cut": seed 002: the cut ellipse as a position measurement
+  kEllipsoidCut,        ///< "ellipsoid_cut": Donati 2021: the cut ellipse as a position measurement
                         ///< (built from the prior, so it counts the prior twice: overconfident)
   kEllipsoidCutDeprior  ///< "ellipsoid_cut_deprior": the cut's information along the row normal
                         ///< minus the prior's, as a scalar measurement (the prior counted once)

@@ -1,4 +1,4 @@
-// One Kalman measurement update in Joseph form with chi-square gating (SPEC §6 "Filter": sequential
+// One Kalman measurement update in Joseph form with chi-square gating (docs/localization-filter.md: sequential
 // updates per sensor, Joseph-form covariance update, P kept symmetric positive definite,
 // chi-square gating of outliers, NIS for every update).
 //
@@ -57,7 +57,7 @@ UpdateOutcome KalmanUpdate(Eigen::VectorXd& state, Eigen::MatrixXd& covariance, 
 /// Throws std::invalid_argument for dof < 1 or probability outside (0, 1).
 double ChiSquareGate(int dof, double probability);
 
-/// Wraps an angle to (-pi, pi] (SPEC §3).
+/// Wraps an angle to (-pi, pi].
 double WrapAngle(double angle_rad);
 
 }  // namespace rowloc::localization

@@ -1,11 +1,11 @@
-// Map-aided ultrasonic measurement (issue 5; SPEC §6 "Map-aided ultrasonic measurement"; seed 002
-// ch. 2-5 with the errata of SPEC §10): which row segment an echo comes from, and the measurement
+// Map-aided ultrasonic measurement (issue 5; docs/map-aided-update.md; Donati 2021
+// ch. 2-5 without its errata): which row segment an echo comes from, and the measurement
 // it gives the filter, by one of three methods (MapAidedMethod, filter_config.hpp).
 //
 // Echo model. A sensor at lever arm l (body frame) with beam direction b and a sound cone of half
 // aperture a sits at p_s = p + R(phi) l. Its echo comes from the nearest reflecting point q of the
 // row outlines inside the cone (geometry/cone_cast.hpp): the predicted range is that cast range,
-// exact for the map. Its derivative treats the row near q as straight (seed 002 ch. 4 models a row
+// exact for the map. Its derivative treats the row near q as straight (Donati 2021 ch. 4 models a row
 // as a line), with the row's direction averaged over row_smoothing_m of the outline: n is the unit
 // normal of that direction towards the sensor, gamma the angle between the beam and -n, and
 //   normal inside the cone (gamma <= a):  r = n^T p_s - c                        (kPerpendicular),
@@ -23,12 +23,12 @@
 // (RangeToLineJacobian for the edge ray); the tests compare them with central differences on
 // straight rows.
 //
-// Segment selection (SPEC §6 step 2): a cone cast of every row segment from the predicted sensor
+// Segment selection (docs/map-aided-update.md, step 2): a cone cast of every row segment from the predicted sensor
 // pose (SegmentIndex::ConeCastAll, R-tree); the first hit and every hit within a window of it are
 // candidates (a polygon corner gives two; a prediction error may put the true surface second); the
 // filter keeps the candidate with the smallest range NIS and gates it (chi-square, 1 dof).
 //
-// Association checks (not in seed 002, whose filter starts in the right lane with a known heading;
+// Association checks (not in Donati 2021, whose filter starts in the right lane with a known heading;
 // added after twelve-seed sweeps found 4-6 of 12 runs of every vineyard scenario locked in a wrong
 // lane or on a wrong heading, docs/map-aided-update.md §3.2). An echo is used only when its
 // association is unambiguous at the k-sigma level (k = k_sigma):
@@ -44,11 +44,11 @@
 //    prediction error of one row pitch (> c) makes an echo fit the neighbouring row as well as the
 //    right one; below c / 2 the right row is the nearer hypothesis.
 //
-// Methods (SPEC §6 steps 3-5):
+// Methods (docs/map-aided-update.md, steps 3-4):
 // - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2 + (|l| + r)^2 sigma_phi^4 / 2 (the
 //   second-order heading term: it keeps the first echoes after initialisation, sigma_phi ~ 0.2 rad,
 //   from locking the heading on a linearization error). The consistent method.
-// - ellipsoid_cut (seed 002 ch. 4): the slab d_m +- k sigma (range_slab.hpp: beam/normal angle,
+// - ellipsoid_cut (Donati 2021 ch. 4): the slab d_m +- k sigma (range_slab.hpp: beam/normal angle,
 //   cone, lever arm) widened by k sigma_phi |d beta/d phi| for the heading uncertainty, cuts the
 //   k-sigma position ellipse E(p, k^2 P_pp) (geometry::ParallelCut); the new centre c+ is a
 //   position measurement with covariance P+/k^2 (H = [I 0]). Built from the prior, it counts the

@@ -1,5 +1,5 @@
 // Measurement models of the vehicle EKF: predicted measurement h(x) and its Jacobian H = dh/dx,
-// analytic, tested against central differences (SPEC §6 "Sensors"; seed 000 ch. 6; seed 004 eqs. (32)-(38)).
+// analytic, tested against central differences (Danzi 2026 ch. 6; Lindgren et al. 2002 eqs. (32)-(38)).
 // x is laid out by StateLayout; R(phi) is the planar rotation by the heading; l a lever arm
 // (body frame, metres); r the yaw rate.
 //
@@ -13,7 +13,7 @@
 //   v_i   = cos(delta_i) (vx - r l_iy) + sin(delta_i) (vy + r l_ix)   (wheel-centre velocity along
 //                                                                       the wheel heading)
 //   h_i   = v_i / R_i                                                  (no slip model; R_i nominal)
-//   h_i   = v_i / (R_i (1 - kappa_i mu_i)),  mu_i = T_i / (N_i r_i)    (slip-aware, seed 004 eqs. (32)-(37):
+//   h_i   = v_i / (R_i (1 - kappa_i mu_i)),  mu_i = T_i / (N_i r_i)    (slip-aware, Lindgren et al. 2002 eqs. 32-37:
 //           the odometer speed v_m = R_w omega = v_a k_s / (k_s - T), T the measured wheel torque,
 //           written with the slip compliance kappa = N r / k_s: the modelled slip T / k_s is
 //           kappa mu, mu the traction coefficient, N_i = m g / (wheel count) the static load and

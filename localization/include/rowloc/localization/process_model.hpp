@@ -1,20 +1,20 @@
-// Process model of the vehicle EKF (seed 000 ch. 4 and 6, the AgriMaRo constant-acceleration
-// model; SPEC §6 and §10).
+// Process model of the vehicle EKF (Danzi 2026 ch. 4 and 6, the AgriMaRo constant-acceleration
+// model; docs/localization-filter.md).
 //
 // Continuous time, body-frame velocity v_B = (vx, vy), yaw rate r, body acceleration a_B:
 //   X'   = vx cos(phi) - vy sin(phi)        Y' = vx sin(phi) + vy cos(phi)        phi' = r
 //   vx'  = ax + r vy                          vy' = ay - r vx
 //   r', ax', ay', delta_i', b_g', R_w', kappa' = white noise (random walks; kappa the slip compliance)
-// Seed 000 writes the velocity step as v_Bx + T (a_Bx - phi_dot v_By); with a_B the IMU's
-// acceleration the body-frame velocity obeys the signs above (SPEC §10 erratum; fixed here).
-// Seed 000's discrete model also uses the step T of its own loop; here every step uses the
-// actual time since the previous measurement (SPEC §10: "use the sampling time").
+// Danzi 2026 writes the velocity step as v_Bx + T (a_Bx - phi_dot v_By); with a_B the IMU's
+// acceleration the body-frame velocity obeys the signs above (an erratum of the source; fixed here).
+// Danzi 2026's discrete model also uses the step T of its own loop; here every step uses the
+// actual time since the previous measurement (a correction of the source, docs/references.md).
 //
 // Discretization over dt (split by the caller into steps <= FilterConfig::max_prediction_step_s):
 // explicit Euler for the velocities, and the mid-step heading phi + r dt / 2 for the position (exact
 // for a constant-speed arc to O(dt^3)). F = df/dx is analytic (tested against central differences).
 // Process noise: Q = diag(q_v^2, q_v^2, q_r^2, q_a^2, q_a^2, q_b^2, q_delta^2 ...) dt on
-// (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states of seed 004 (text after eq. (41)) a variance
+// (vx, vy, r, ax, ay, b_g, delta_i), and for the slip-aware states (Lindgren et al. 2002, after eq. (41)) a variance
 // growing with the distance d_i = |v_i| dt wheel i rolled in the step: q_R^2 d_i, q_k^2 d_i, the
 // kappas of wheels i != j sharing rho q_k^2 sqrt(d_i d_j) (slip_compliance_wheel_correlation rho: one
 // terrain under all wheels). The wheel-angle states, when the layout has them, are propagated by

@@ -1,13 +1,13 @@
 // Range of a body-mounted ultrasonic beam to a straight row edge, as a function of the planar pose.
 //
 // Pose x = (X, Y, phi): vehicle reference point in the local ENU frame (m) and heading from +East,
-// counter-clockwise (rad), SPEC §3. The sensor sits at lever arm l (body frame: x forward, y left, m)
+// counter-clockwise (rad). The sensor sits at lever arm l (body frame: x forward, y left, m)
 // and points along body angle theta_b. With R(phi) the planar rotation,
 //   sensor position   p_s = p + R(phi) l,
 //   beam direction    u   = R(phi) (cos theta_b, sin theta_b),
-// and the row edge in normal form n^T x = c (|n| = 1; SPEC §4: normal form, because the source's
-// y = m x + q breaks for rows along y, SPEC §10), the beam meets the line after
-//   r(x) = (c - n^T p_s) / (n^T u)            (seed 002 ch. 4 geometry, rewritten in normal form)
+// and the row edge in normal form n^T x = c (|n| = 1; normal form, because Donati 2021's
+// y = m x + q breaks for rows along y), the beam meets the line after
+//   r(x) = (c - n^T p_s) / (n^T u)            (Donati 2021 ch. 4 geometry, rewritten in normal form)
 // which is valid when the beam points at the line from the sensor's side: r > 0 and n^T u != 0.
 //
 // The model is templated on the scalar so that ceres::Jet gives its Jacobian by automatic

@@ -1,5 +1,5 @@
-// Layout of the vehicle EKF state (SPEC §6 "Filter"; seed 000 ch. 4 and 6, the 12-state AgriMaRo
-// design, extended per vehicle kind and with the slip-aware augmented states of seed 004).
+// Layout of the vehicle EKF state (Danzi 2026 ch. 4 and 6, the 12-state AgriMaRo
+// design, extended per vehicle kind and with the slip-aware augmented states of Lindgren et al. 2002).
 //
 // Index  name         unit     meaning
 //   0    x_m          m        reference point, local ENU east
@@ -23,7 +23,7 @@
 //   then, with GNSS-bias estimation: gnss_bias_east_m, gnss_bias_north_m (m), the slowly varying
 //   part of the receiver's position error (multipath under canopy), a first-order Gauss-Markov
 //   process (process_model.hpp)
-// Seed 000 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
+// Danzi 2026 orders the 12 states (X, Y, phi, v_Bx, v_By, phi_dot, a_Bx, a_By, delta_1..3, b_g); the
 // gyro bias is moved before the steering angles here so that the base block has the same indices
 // for every vehicle kind (a swerve robot has 3 steering states, a 4WS vehicle 4, the others none).
 #pragma once

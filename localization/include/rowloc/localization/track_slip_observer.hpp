@@ -1,13 +1,13 @@
 // Track slip of a skid-steer / tracked vehicle from measured pose and track speeds: the adaptive
-// identity observer of seed 001 (Tazzari, Azzollini, Marconi), eq. (8); SPEC §6 "Slip", third model.
+// identity observer of Tazzari, Azzollini and Marconi (n.d.), eq. (8): the third slip model.
 // Derivation, discretization and measurements: docs/localization-track-slip.md.
 //
-// Model, seed 001 eq. (3)-(5): with the track (sprocket) speeds v_R = r omega_R, v_L = r omega_L and
+// Model, Tazzari et al. n.d. eq. (3)-(5): with the track (sprocket) speeds v_R = r omega_R, v_L = r omega_L and
 // the slip coefficients eta = 1 - i of eq. (4) (i = 1 - V_t/(omega r), eq. (6)),
 //   [x', y', theta']^T = Psi(theta, v) [eta_R, eta_L]^T,
 //   Psi = [ cos(theta) v_R/2,  cos(theta) v_L/2 ;  sin(theta) v_R/2,  sin(theta) v_L/2 ;
 //           v_R/(2d),         -v_L/(2d) ],
-// where 2d is the track width: the distance between the track centre lines (seed 001 §II: "d is
+// where 2d is the track width: the distance between the track centre lines (Tazzari et al. n.d. §II: "d is
 // half the distance between the center lines"). rowloc body frame: x forward, y left, right track
 // at y = -d, so a positive yaw rate (left turn) needs eta_R v_R > eta_L v_L.
 // Observer, eq. (8), with the observation error e = (x - x^, y - y^, wrap(theta - theta^)) of eq. (9):
@@ -15,7 +15,7 @@
 // L = diag(l1, l2, l3) > 0, Lambda = diag(lambda_R, lambda_L) > 0. The regressor uses the
 // *measured* theta, so the error system (10) is linear:  e' = -L e - Psi eta~,  eta~' = Lambda Psi^T e
 // (eta~ = eta^ - eta). Lyapunov function: V = 1/2 (e^T e + eta~^T Lambda^-1 eta~), V' = -e^T L e.
-// (Seed 001 writes e^T L^-1 e: its cross terms only cancel for L = I; with L = I both agree. Its
+// (Tazzari et al. n.d. write e^T L^-1 e: its cross terms only cancel for L = I; with L = I both agree. Its
 // eq. (11) also has the sign of the first two entries of the second row flipped; the matrix
 // Phi Phi^T printed after eq. (14) is that of the corrected regressor. det(Psi^T Psi) =
 // v_R^2 v_L^2 / (4 d^2): both eta are identifiable whenever both tracks move, on a straight line too.)
@@ -51,7 +51,7 @@ namespace rowloc::localization {
 /// Parameters of TrackSlipObserver; TrackSlipObserverConfigProblem() checks them.
 struct TrackSlipObserverConfig {
   double track_width_m = 1.1;  ///< 2d: distance between the track centre lines (> 0)
-  /// diag(L) = (l1, l2, l3) for (x, y, theta) errors, 1/s, > 0. Seed 001 §V used the identity.
+  /// diag(L) = (l1, l2, l3) for (x, y, theta) errors, 1/s, > 0. Tazzari et al. n.d. §V used the identity.
   Eigen::Vector3d injection_gains_per_s = Eigen::Vector3d::Ones();
   /// diag(Lambda) = (lambda_R, lambda_L), > 0 (units 1/m^2 against the position errors).
   Eigen::Vector2d adaptation_gains = Eigen::Vector2d::Ones();
@@ -105,7 +105,7 @@ class TrackSlipObserver {
   bool initialised() const { return initialised_; }
   double eta_right() const { return eta_hat_.x(); }
   double eta_left() const { return eta_hat_.y(); }
-  /// Track slip i = 1 - eta (seed 001 eq. (4)); the sim's truth `slip` for tracks.
+  /// Track slip i = 1 - eta (Tazzari et al. n.d. eq. (4)); the sim's truth `slip` for tracks.
   double slip_right() const { return 1.0 - eta_hat_.x(); }
   double slip_left() const { return 1.0 - eta_hat_.y(); }
   /// Observer state (x^_m, y^_m, theta^_rad), theta^ wrapped to (-pi, pi]; zero before the first update.

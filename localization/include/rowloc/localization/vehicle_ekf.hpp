@@ -1,5 +1,5 @@
 // The vehicle EKF: GPS, IMU, wheel encoders, steering encoders and visual odometry fused over the
-// state of StateLayout (issue 4; SPEC §6 "Filter"; seed 000 ch. 4 and 6; seed 004 for the
+// state of StateLayout (issue 4; Danzi 2026 ch. 4 and 6; Lindgren et al. 2002 for the
 // slip-aware odometry). docs/localization-filter.md describes the whole filter.
 //
 // Each message is processed in time order: the state is predicted to the message's time stamp

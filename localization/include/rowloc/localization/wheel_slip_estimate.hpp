@@ -1,13 +1,13 @@
 // Per-wheel longitudinal slip (SAE) from the filtered state and the raw encoder speeds (issue 4,
-// slip estimator 1; SPEC §6 "Slip"; seed 000 ch. 7):
+// slip estimator 1; Danzi 2026 ch. 7):
 //   s = (omega R - v_long) / max(|omega R|, |v_long|)
 // with v_long the wheel-centre velocity along the wheel heading from the filtered body twist and
 // steering angle (measurement_models.hpp), omega the *raw* encoder speed (not the filter's
 // prediction), R the nominal wheel radius of the vehicle file (or, on request, the R_w state, below;
-// seed 000 ch. 7 uses the wheel radius:
+// Danzi 2026 ch. 7 uses the wheel radius:
 // not the slip-aware state R_w, which at constant torque absorbs the slip itself, since only
 // R_w (1 - kappa mu) = R_w (k_s - T) / k_s is observable then; a terrain's rolling radius R_a below the nominal R_m
-// therefore reads as extra slip, s_a - s_m = (1 - s_a) (R_a / R_m - 1), seed 004 eq. (29); see
+// therefore reads as extra slip, s_a - s_m = (1 - s_a) (R_a / R_m - 1), Lindgren et al. 2002 eq. (29); see
 // docs/localization-filter.md §4); s = 0 when both |omega R| and |v_long| are below 0.05 m/s; saturated to [-1, 1] (speeds
 // of opposite signs would give up to 2 in magnitude).
 #pragma once

@@ -1,4 +1,4 @@
-// Local East-North-Up (ENU) tangent frame at a WGS84 origin (SPEC §3: "World frame: local
+// Local East-North-Up (ENU) tangent frame at a WGS84 origin (the design: "World frame: local
 // East-North-Up tangent plane with a georeferenced origin ... Convert with GeographicLib
 // (LocalCartesian), never by hand").
 //

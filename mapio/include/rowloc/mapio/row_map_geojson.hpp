@@ -1,4 +1,4 @@
-// Row map files in GeoJSON (RFC 7946), the format of SPEC §3 ("Files: GeoJSON (RFC 7946 in
+// Row map files in GeoJSON (RFC 7946), the format the design asks for ("Files: GeoJSON (RFC 7946 in
 // WGS84, plus the local origin ...), so that GIS tools open them"). Specified, with an example,
 // in docs/map-format.md. In short:
 //   - a FeatureCollection with the local ENU origin in the foreign member

@@ -1,14 +1,14 @@
 // Shared by the simulator (sim) and the filter (localization): lives in mapio, the file-format
 // library both may depend on.
-// Vehicle configurations as data (issue 3, "Vehicles and motion"; SPEC §6 "Vehicle models
-// (configured by a file, not recompiled)"; SPEC §3 body frame: x forward, y left, z up, origin at the
+// Vehicle configurations as data (issue 3, "Vehicles and motion"; the design's "Vehicle models
+// (configured by a file, not recompiled)"; body frame: x forward, y left, z up, origin at the
 // vehicle reference point).
 //
 // Four kinds (docs/simulation-vehicles.md gives the geometry of each shipped file and its source):
-//   swerve_drive        >= 3 independently steered and driven wheels (AgriMaRo, seed 000 §2.3, eq. 2.3)
-//   four_wheel_steer    4 steered and driven wheels (vineyard UGV, seed 002 Tables 5.1 and 5.5)
-//   differential_drive  2 fixed driven wheels on a common axle (seed 001 eq. (2), the "DWR")
-//   skid_steer          2 tracks (seed 001 eqs. (3)-(7)); WheelGeometry describes a track: its centre
+//   swerve_drive        >= 3 independently steered and driven wheels (AgriMaRo, Danzi 2026 §2.3, eq. 2.3)
+//   four_wheel_steer    4 steered and driven wheels (vineyard UGV, Donati 2021 Tables 5.1 and 5.5)
+//   differential_drive  2 fixed driven wheels on a common axle (Tazzari et al. n.d. eq. (2), the "DWR")
+//   skid_steer          2 tracks (Tazzari et al. n.d. eqs. (3)-(7)); WheelGeometry describes a track: its centre
 //                       line position and its sprocket radius; `tracks` holds contact length and
 //                       Wong's turning-resistance coefficient.
 //
@@ -58,7 +58,7 @@ struct SensorMount {
   bool operator==(const SensorMount&) const = default;
 };
 
-/// Track data of a skid-steer vehicle (seed 001 eq. (7): l; Wong, Theory of Ground Vehicles §7.2:
+/// Track data of a skid-steer vehicle (Tazzari et al. n.d. eq. (7): l; Wong, Theory of Ground Vehicles §7.2:
 /// turning-resistance moment M_r = mu_t m g l / 4 for a uniform track pressure).
 struct TrackParameters {
   double contact_length_m = 0.0;                ///< l > 0: track-ground contact length

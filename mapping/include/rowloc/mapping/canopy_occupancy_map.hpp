@@ -1,6 +1,6 @@
 // Occupancy map of the canopy as an OctoMap (Hornung et al., "OctoMap: an efficient probabilistic
 // 3D mapping framework based on octrees", Autonomous Robots 2013), written as a compact .bt file
-// (SPEC §5 step 8; read back later for ray casts, SPEC §8).
+// (map build step 8, docs/mapping.md; read back later for ray casts).
 //
 // Voxels: OctoMap's octree of depth 16 at resolution r has voxel keys k = floor(x / r) + 32768 per
 // axis, so voxel i covers [i r, (i + 1) r) and is centred at (i + 1/2) r; coordinates must lie in
@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -33,6 +34,10 @@ struct OctoMapOptions {
   /// Edge of the finest voxel, metres; must be in [kMinResolutionM, kMaxResolutionM].
   double resolution_m = 0.05;
 };
+
+/// Largest .bt file CanopyOccupancyMap::Load reads: 256 MiB, the limit of a row map file (the
+/// canopy of config/worlds/vineyard-002.json at 5 cm voxels, `rowloc world`, is 0.3 MiB).
+inline constexpr std::uintmax_t kMaxOctoMapFileBytes = std::uintmax_t{256} << 20;
 
 /// Accepted range of OctoMapOptions::resolution_m, metres.
 inline constexpr double kMinResolutionM = 1e-4;
@@ -58,8 +63,9 @@ OctoMapSummary WriteOctoMap(const PointCloud& cloud, const OctoMapOptions& optio
 /// std::logic_error on use.
 class CanopyOccupancyMap {
  public:
-  /// Reads a binary OctoMap (.bt). Throws OccupancyMapError if the file is missing or is not a
-  /// valid .bt file.
+  /// Reads a binary OctoMap (.bt). Throws OccupancyMapError if the file is missing, is not a
+  /// regular file (a FIFO, a device, a directory: refused unread), is larger than
+  /// kMaxOctoMapFileBytes, or is not a valid .bt file.
   static CanopyOccupancyMap Load(const std::filesystem::path& bt_path);
 
   ~CanopyOccupancyMap();

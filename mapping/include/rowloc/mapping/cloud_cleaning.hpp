@@ -1,4 +1,4 @@
-// Step 1 of the map build (SPEC §5): voxel downsampling and statistical outlier removal.
+// Step 1 of the map build (docs/mapping.md): voxel downsampling and statistical outlier removal.
 //
 // Voxel downsampling is done here in double precision (one centroid per occupied voxel of edge
 // voxel_size_m, voxels keyed by floor((p - min) / size)); PCL's VoxelGrid works in float and

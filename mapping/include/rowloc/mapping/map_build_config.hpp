@@ -1,4 +1,4 @@
-// Parameters of `rowloc map build` (SPEC §5, issue 27): one struct per pipeline step, gathered in
+// Parameters of `rowloc map build` (issue 27): one struct per pipeline step, gathered in
 // MapBuildConfig and read from a strict JSON file (config/mapping/default.json; docs/mapping.md
 // lists every key, its default and its domain).
 //

@@ -1,4 +1,4 @@
-// `rowloc map build` (issue 27, SPEC §5): survey point cloud -> georeferenced row map, the whole
+// `rowloc map build` (issue 27; docs/mapping.md): survey point cloud -> georeferenced row map, the whole
 // pipeline and its outputs.
 //
 //   read -> clean (cloud_cleaning.hpp) -> terrain (terrain_grid.hpp) -> normalize + band and rows

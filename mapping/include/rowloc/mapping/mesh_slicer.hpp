@@ -1,4 +1,4 @@
-// Planar slices of a triangle mesh (SPEC §5 step 6: the row outline at height h_ref), computed by
+// Planar slices of a triangle mesh (map build step 6: the row outline at height h_ref), computed by
 // CGAL::Polygon_mesh_slicer on a CGAL::Surface_mesh with the Epick kernel (exact predicates,
 // inexact constructions; CGAL manual, "Polygon Mesh Processing", section "Slicer").
 //

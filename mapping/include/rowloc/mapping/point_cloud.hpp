@@ -1,5 +1,5 @@
 // Survey point clouds: an in-memory cloud of 3-D points in local metres, and its PLY / PCD files
-// (SPEC §5, input of the mapping pipeline).
+// (input of the mapping pipeline, docs/mapping.md).
 //
 // Files are parsed and written by PCL (pcl::io::loadPLYFile / loadPCDFile, PLYWriter / PCDWriter);
 // only the x, y, z fields are read, as float or double, whatever other fields the file carries.
@@ -39,7 +39,9 @@ class PointCloudError : public std::runtime_error {
 };
 
 /// Reads a point cloud, by extension (case-insensitive): ".ply" (ASCII or binary) or ".pcd"
-/// (ASCII, binary or binary_compressed). Only the x, y, z fields are kept.
+/// (ASCII, binary or binary_compressed). Only the x, y, z fields are kept. ".las" (LAS 1.0-1.4,
+/// uncompressed, point formats 0-10) is read by ReadLasPointCloud (las_file.hpp), in double;
+/// ".laz" is refused with the command that converts it.
 /// The header is checked against the file first (CheckPcdFile / CheckPlyFile, point_cloud_header.hpp),
 /// so memory is bounded by what the file holds, not by what its header claims.
 /// Throws PointCloudError if the file is missing or not a regular file, the extension is unknown,

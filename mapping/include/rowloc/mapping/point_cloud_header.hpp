@@ -11,7 +11,8 @@
 //     DATA binary_compressed: the compressed block lies in the file, its uncompressed size is
 //     POINTS x point size and at most kMaxLzfExpansion times the compressed size (an LZF back
 //     reference of 3 bytes yields at most 264 bytes: Lehmann 2000, liblzf). DATA ascii: every
-//     non-empty line holds exactly the announced number of values, and there are POINTS lines.
+//     non-empty line holds exactly the announced number of values, and there are POINTS lines; a
+//     line of white space only is refused (PCL reads it as a point of zeros).
 //   - PLY (Turk 1994): "ply", a format line, elements with properties (scalars and lists).
 //     Binary: the bytes that follow are at least the sum over elements of count x the smallest
 //     record (scalars plus list counts), and exactly that when no element has a list.
@@ -19,7 +20,8 @@
 //     and as many non-empty lines as records.
 // A failed check throws PointCloudError naming the file, the line where it applies, and the claim.
 // Time is linear in the file size (the ASCII body is scanned once in blocks), memory is constant;
-// a header line longer than kMaxHeaderLineBytes or a header beyond kMaxHeaderBytes is refused.
+// a header line longer than kMaxHeaderLineBytes, a header beyond kMaxHeaderBytes or an ASCII body
+// line longer than kMaxAsciiLineBytes (PCL reads each line whole) is refused.
 #pragma once
 
 #include "rowloc/mapping/point_cloud.hpp"
@@ -32,6 +34,7 @@ namespace rowloc::mapping {
 
 inline constexpr std::size_t kMaxHeaderBytes = 1 << 20;      ///< 1 MiB of header text at most
 inline constexpr std::size_t kMaxHeaderLineBytes = 1 << 16;  ///< 64 KiB per header line at most
+inline constexpr std::size_t kMaxAsciiLineBytes = 1 << 20;   ///< 1 MiB per ASCII body line at most
 inline constexpr std::size_t kMaxFields = 256;               ///< fields (PCD) / properties per element (PLY)
 inline constexpr std::uint64_t kMaxValuesPerPoint = 4096;     ///< sum of COUNT (PCD)
 inline constexpr std::uint64_t kMaxLzfExpansion = 88;         ///< 264 output bytes per 3-byte back reference

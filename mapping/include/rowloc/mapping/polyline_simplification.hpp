@@ -1,4 +1,4 @@
-// Step 7 of the map build (SPEC §5): simplification of a closed outline with CGAL's
+// Step 7 of the map build (docs/mapping.md): simplification of a closed outline with CGAL's
 // Polyline_simplification_2 (Douglas-Peucker-like vertex removal in a constrained triangulation,
 // so that the result never intersects itself; cost: the largest squared distance between the
 // simplified and the original polyline; stop when that would exceed tolerance_m^2).

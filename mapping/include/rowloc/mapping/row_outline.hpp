@@ -1,4 +1,4 @@
-// Steps 5-7 of the map build (SPEC §5), outline route: the outline of one row part at h_ref, traced
+// Steps 5-7 of the map build (docs/mapping.md), outline route: the outline of one row part at h_ref, traced
 // directly from its band points (docs/mapping.md says why this route and what the mesh route adds).
 //
 // TraceOutline (parameters in OutlineParams):

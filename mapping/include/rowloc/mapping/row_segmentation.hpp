@@ -1,4 +1,4 @@
-// Steps 3-4 of the map build (SPEC §5): the canopy band, and the rows found in it.
+// Steps 3-4 of the map build (docs/mapping.md): the canopy band, and the rows found in it.
 //
 // SelectCanopyBand keeps the points whose height above the terrain is within band_half_width_m of
 // h_ref and projects them to the horizontal plane.

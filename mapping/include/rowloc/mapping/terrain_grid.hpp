@@ -1,4 +1,4 @@
-// Step 2 of the map build (SPEC §5): ground classification and a terrain model (DTM) that follows
+// Step 2 of the map build (docs/mapping.md): ground classification and a terrain model (DTM) that follows
 // slopes and undulations, with bilinear height lookup; step 3 (height above the terrain) uses it.
 //
 // Algorithm (BuildTerrainGrid):

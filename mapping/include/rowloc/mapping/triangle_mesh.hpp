@@ -1,4 +1,4 @@
-// Indexed triangle meshes in local metres (SPEC §5 step 5: the per-row low-complexity canopy mesh),
+// Indexed triangle meshes in local metres (map build step 5: the per-row low-complexity canopy mesh),
 // their validation, and two closed test meshes (a box and a vertical n-sided prism standing in for
 // a cylinder) used as fixtures and as row-canopy stand-ins.
 //

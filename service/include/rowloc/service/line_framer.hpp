@@ -1,5 +1,5 @@
 // Newline-delimited framing of a byte stream (the service protocol is one JSON message per
-// line, SPEC §7). Bytes arrive in arbitrary chunks from a socket; the framer returns complete
+// line, docs/protocol.md). Bytes arrive in arbitrary chunks from a socket; the framer returns complete
 // lines, strips "\r\n" and "\n", skips blank lines, and enforces a maximum line length so that
 // a client that never sends a newline cannot grow a buffer without bound: an over-long line is
 // reported once (with its line number) and its bytes are discarded up to the next newline.

@@ -18,6 +18,10 @@ enum class SlowClientPolicy { kDropOldest, kDisconnect };
 std::optional<FsyncPolicy> FsyncPolicyFromName(std::string_view name);
 std::optional<SlowClientPolicy> SlowClientPolicyFromName(std::string_view name);
 
+/// The largest max_line_bytes a server accepts (64 MiB): no line the service writes to a journal is
+/// longer, whatever its settings were.
+inline constexpr std::size_t kMaxLineBytesLimit = std::size_t{64} << 20;
+
 class ServiceSettingsError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

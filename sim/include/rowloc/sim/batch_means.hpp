@@ -1,7 +1,7 @@
 // The mean of a serially correlated sequence and its confidence interval by batch means, for the
 // time-averaged NEES and NIS of a filter run (docs/validation.md, "Consistency").
 //
-// The chi-square band of a time average (chi_square_bands.hpp; seed 004, Eq. 43) holds for
+// The chi-square band of a time average (chi_square_bands.hpp; Lindgren et al. 2002, Eq. 43) holds for
 // independent samples. A filter's NEES is correlated over the filter's time constant: at 10 Hz a
 // correlation time of 10-20 s leaves a few dozen independent samples in thousands, and that band
 // is then far too narrow to test anything. Batch means (Law, Simulation Modeling and Analysis,

@@ -1,4 +1,4 @@
-// CanopySurfaceSampler: a synthetic survey point cloud of a RowWorld (SPEC §8: "A synthetic survey
+// CanopySurfaceSampler: a synthetic survey point cloud of a RowWorld (the design: "A synthetic survey
 // generator produces point clouds of the same world for the mapping pipeline"; issue 3, "World").
 // Documented in docs/simulation-world.md, "Outputs: row map, survey cloud, OctoMap".
 //

@@ -1,13 +1,13 @@
-// Chi-square acceptance bands of the filter-consistency tests (SPEC §8; seed 004, Eqs. 42-44).
+// Chi-square acceptance bands of the filter-consistency tests (Lindgren et al. 2002, Eqs. 42-44).
 //
 // - Per sample: a consistent filter's NEES e' P^-1 e (or NIS v' S^-1 v) of dimension n is
 //   chi2(n); its central interval of probability p is [Q(n, (1-p)/2), Q(n, (1+p)/2)], Q the
 //   chi-square quantile.
-// - Time average (seed 004, Eq. 43): eps_bar = (1/N) sum_k eps_k; N eps_bar ~ chi2(sum_k n_k),
+// - Time average (Lindgren et al. 2002, Eq. 43): eps_bar = (1/N) sum_k eps_k; N eps_bar ~ chi2(sum_k n_k),
 //   so its band is [Q(D, (1-p)/2), Q(D, (1+p)/2)] / N with D = sum_k n_k (= N n for a fixed n).
 //   The seed approximates Q by Wilson-Hilferty (Eq. 44); we use the exact quantile from
-//   Boost.Math (for N = 1099, n = 2 both give 1.883-2.120, the seed's 1.8831-2.1204).
-// - Whiteness (seed 004, after Eq. 42): for lag l > 0 the normalized autocorrelation of a white
+//   Boost.Math (for N = 1099, n = 2 both give 1.883-2.120, the paper's 1.8831-2.1204).
+// - Whiteness (Lindgren et al. 2002, after Eq. 42): for lag l > 0 the normalized autocorrelation of a white
 //   zero-mean sequence of K samples is approximately N(0, 1/K); the band is +-z / sqrt(K) with
 //   z = Phi^-1((1+p)/2) (1.95996 for p = 0.95). For whitened innovations of length m pass
 //   K m samples (metrics.hpp explains why).

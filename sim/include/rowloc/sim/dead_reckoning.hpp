@@ -3,7 +3,7 @@
 // encoder speeds, steering encoder angles and the raw gyro with the NOMINAL wheel radii
 // (VehicleConfig::wheels[i].nominal_radius_m) and nothing else: no slip, no bias, no terrain.
 //
-// Twist from the wheels (seed 000 eq. (2.2)/(2.3); docs/simulation-vehicles.md). Body frame x
+// Twist from the wheels (Danzi 2026 eq. (2.2)/(2.3); docs/simulation-vehicles.md). Body frame x
 // forward, y left; unknowns x = (v_x, v_y, r), r = yaw rate. Wheel i at p_i = (p_x, p_y) with
 // heading angle d_i (the held steering encoder angle; 0 for a fixed wheel or track) has the centre
 // velocity v_w = (v_x - r p_y, v_y + r p_x) and, rolling without slip along (cos d_i, sin d_i),

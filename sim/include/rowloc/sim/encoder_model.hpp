@@ -1,4 +1,4 @@
-// Wheel and steering encoder error models (SPEC §8 "encoder quantization and filter delay";
+// Wheel and steering encoder error models (the design's "encoder quantization and filter delay";
 // issue 3, Sensors). Truth in, measurement out.
 //
 // Wheel encoder (docs/simulation-sensors.md):

@@ -1,4 +1,4 @@
-// GNSS receiver error model: truth in, fix out (SPEC §8 "GPS noise, dropouts under canopy and
+// GNSS receiver error model: truth in, fix out (the design's "GPS noise, dropouts under canopy and
 // multipath jumps"; issue 3, Sensors). The caller passes the true antenna position (world ENU, m),
 // the epoch time (s) and the canopy-cover factor c in [0, 1] above the antenna at that epoch.
 //

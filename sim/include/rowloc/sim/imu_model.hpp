@@ -1,5 +1,5 @@
 // Planar IMU error model: truth in (body-frame specific force x, y in m/s^2 and yaw rate in rad/s),
-// measurement out (SPEC §8 "IMU noise and bias drift"; issue 3, Sensors).
+// measurement out (the design's "IMU noise and bias drift"; issue 3, Sensors).
 //
 // Math, per axis (docs/simulation-sensors.md; IEEE Std 952 noise terms):
 //   y_k = x_k + b_k + sigma_d w_k,  sigma_d = N sqrt(f)      (N: white-noise density, f: rate_hz)

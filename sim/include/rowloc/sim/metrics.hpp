@@ -1,5 +1,5 @@
-// Validation metrics of an estimated trajectory against the ground truth (SPEC §8 "Metrics",
-// §9; issue 3 "Metrics and reports"). Pure functions on value types; Evaluate() runs them all.
+// Validation metrics of an estimated trajectory against the ground truth (docs/validation.md;
+// issue 3 "Metrics and reports"). Pure functions on value types; Evaluate() runs them all.
 //
 // Math (docs/validation.md gives the full definitions):
 //  - Truth at an estimate's time t: linear interpolation between the bracketing truth samples,
@@ -17,10 +17,10 @@
 //    (Eigen LDLT), compared with the recorded nis (relative difference > 1e-6 is a mismatch).
 //    Bands: chi_square_bands.hpp. NIS statistics and whiteness use the accepted updates only;
 //    the fraction gated out is reported next to them.
-//  - Whiteness (seed 004, Eq. 42) on the whitened innovations w_k = L_k^-1 v_k (S_k = L_k L_k'):
+//  - Whiteness (Lindgren et al. 2002, Eq. 42) on the whitened innovations w_k = L_k^-1 v_k (S_k = L_k L_k'):
 //    rho(l) = sum_k w_k'w_{k+l} / sqrt(sum_k w_k'w_k * sum_k w_{k+l}'w_{k+l}), k = 1..K-l, for
 //    l = 1..L; inside the band when |rho(l)| <= 1.96/sqrt(K m) for innovations of length m. For
-//    m = 1 this is the seed's 1.96/sqrt(K); for m > 1 the seed's band is too wide (the variance of
+//    m = 1 this is the paper's 1.96/sqrt(K); for m > 1 the paper's band is too wide (the variance of
 //    rho for whitened m-vectors is 1/(K m): with m = 2 it covers ~99.4 %, not 95 %).
 //  - Drift after loss of absolute fixes: every maximal run of truth samples with
 //    gnss_available = false lasting >= min duration (from its first sample to the first sample
@@ -147,7 +147,7 @@ struct WhitenessResult {
   double fraction_inside = 0.0;
   std::string not_computed;            ///< reason when not computed (too few samples, mixed sizes)
 };
-/// Eq. 42 of seed 004 on already whitened innovations.
+/// Eq. 42 of Lindgren et al. 2002 on already whitened innovations.
 WhitenessResult InnovationWhiteness(const std::vector<Eigen::VectorXd>& whitened, std::size_t max_lag,
                                     double probability = 0.95);
 

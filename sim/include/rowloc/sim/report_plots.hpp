@@ -7,7 +7,7 @@
 // (fork + chdir + execvp: no shell, so no quoting of user paths is involved). It draws:
 //  1. trajectory.svg: row map polylines (if any), truth, estimate and k-sigma position ellipses
 //     every ellipse_interval_s seconds, equal axes. Ellipse of N(c, S_xy) at k sigma: the points
-//     c + k L [cos a, sin a]' with S_xy = L L' (SPEC §3: shape matrix P = k^2 S), k = 2 by default.
+//     c + k L [cos a, sin a]' with S_xy = L L' (shape matrix P = k^2 S), k = 2 by default.
 //  2. errors.svg: across, along and heading error vs time with the +-k sigma envelope from the
 //     estimate's covariance (sigma_across, sigma_along, sigma_heading of metrics.hpp).
 //  3. histograms.svg: histograms of the across, along and heading errors.

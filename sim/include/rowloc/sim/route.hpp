@@ -1,11 +1,11 @@
-// Route: the time-parameterized path a simulated vehicle drives (issue 3, "Vehicles and motion";
-// SPEC §8). The ground truth of every run is derived from it, so position, heading, speed, yaw rate
+// Route: the time-parameterized path a simulated vehicle drives (issue 3, "Vehicles and motion").
+// The ground truth of every run is derived from it, so position, heading, speed, yaw rate
 // and their derivatives are exact and mutually consistent. Documented in docs/simulation-routes.md.
 //
-// Geometry (SI units, world ENU frame, heading from +East counter-clockwise, SPEC §3):
+// Geometry (SI units, world ENU frame, heading from +East counter-clockwise):
 // - The path is a chain of pieces whose curvature is linear in arc length u in [0, l]:
 //   kappa(u) = kappa0 + kappa' u, kappa' = (kappa1 - kappa0) / l (line, circular arc, clothoid;
-//   seed 004 §2.3 "Path Formulation" composes its commanded paths of lines and arcs).
+//   Lindgren et al. 2002 §2.3 "Path Formulation" composes its commanded paths of lines and arcs).
 // - Heading theta(u) = theta0 + kappa0 u + kappa' u^2 / 2 (exact).
 // - Position p(u) = p0 + int_0^u (cos theta, sin theta) du: closed form for lines and arcs,
 //   4-point Gauss-Legendre quadrature on sub-intervals with |kappa| h <= 0.1 and |kappa'| h^2 <= 0.1

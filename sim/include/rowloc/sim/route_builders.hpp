@@ -1,13 +1,13 @@
 // Named routes for the simulation scenarios (issue 3, "driving a route: along the rows with headland
 // turns, straight runs, circles") and their JSON form. Documented in docs/simulation-routes.md.
 //
-// - StraightRoute: one line (seed 000 ch. 7: AgriMaRo's straight runs at 1 m/s after 1 m/s^2;
-//   seed 001: the tracked vehicle's constant-speed straight runs).
+// - StraightRoute: one line (Danzi 2026 ch. 7: AgriMaRo's straight runs at 1 m/s after 1 m/s^2;
+//   Tazzari et al. n.d.: the tracked vehicle's constant-speed straight runs).
 // - CircleRoute: `laps` full circles of signed radius R (> 0 turns left): one arc of length
-//   2 pi |R| laps (seed 004 Fig. 3: loops of 4 m radius; seed 001: circular runs).
+//   2 pi |R| laps (Lindgren et al. 2002 Fig. 3: loops of 4 m radius; Tazzari et al. n.d.: circular runs).
 // - ShuttleRoute: `legs` straight legs joined by 180-degree semicircles of radius |r| that alternate
-//   in direction (seed 004, results near Fig. 7: "straight line travel, with alternate right and left 180°
-//   turns"). r > 0: the first turn is to the left, r < 0: to the right (as in seed 004). Each turn
+//   in direction (Lindgren et al. 2002, results near Fig. 7: "straight line travel, with alternate right and left 180°
+//   turns"). r > 0: the first turn is to the left, r < 0: to the right (as in Lindgren et al. 2002). Each turn
 //   shifts the next leg by 2|r| sideways, so leg i (0-based) runs from
 //   start + i 2|r| n (n the side of the first turn) in direction (-1)^i t.
 // - RowsRoute: a serpentine through consecutive lanes of a RowWorld. Lane j lies midway between
@@ -19,7 +19,7 @@
 //   are joined by a semicircle of radius spacing / 2 (left after a forward lane, right after a
 //   backward one), which ends exactly on the next lane's headland line.
 // Turn transitions: by default (the seven-argument builders, turn_transition_m = 0) the turns are
-// semicircles joined to the lines directly, as seed 004 commands its paths (lines and arcs), so the
+// semicircles joined to the lines directly, as Lindgren et al. 2002 command their paths (lines and arcs), so the
 // curvature and the yaw rate jump at the joins (Route::BreakTimes lists the instants). With
 // turn_transition_m = c > 0 each 180-degree turn becomes clothoid (0 -> k, length c), arc k,
 // clothoid (k -> 0, length c), with k > 1/r solved so that the turn still shifts the path by exactly

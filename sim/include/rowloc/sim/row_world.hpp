@@ -1,4 +1,4 @@
-// RowWorld: the exact ground truth of a simulated vineyard (SPEC §8; issue 3, "World"): parallel
+// RowWorld: the exact ground truth of a simulated vineyard (issue 3, "World"): parallel
 // rows on a terrain, their canopy as an exact 3-D solid, its outline at any height above the
 // terrain, and the true 2-D row map. Documented in docs/simulation-world.md.
 //
@@ -59,7 +59,7 @@ struct CanopyParams {
   double top_m = 1.8;                      ///< t0, mean top
   double height_variation_m = 0.1;         ///< a_h >= 0
   double height_wavelength_m = 12.0;       ///< wavelength of the band variation, > 0
-  double roughness_amplitude_m = 0.0;      ///< A_rho >= 0 (0: smooth canopy, as in seed 002)
+  double roughness_amplitude_m = 0.0;      ///< A_rho >= 0 (0: smooth canopy, as in Donati 2021)
   double roughness_min_wavelength_m = 0.1; ///< lambda_min > 0
   double roughness_max_wavelength_m = 0.3; ///< lambda_max >= lambda_min
   bool operator==(const CanopyParams&) const = default;

@@ -1,4 +1,4 @@
-// Simulation scenarios as data (issue 3, "Logs, scenarios, command line"; SPEC §8): one JSON file
+// Simulation scenarios as data (issue 3, "Logs, scenarios, command line"): one JSON file
 // under config/scenarios/ names the world (or an open field), the vehicle, the terrain under it,
 // the route it drives and its sensors with their error profiles. Format and the shipped scenarios:
 // docs/simulation-scenarios.md.
@@ -41,7 +41,7 @@ class ScenarioError : public std::runtime_error {
 struct GnssScenario {
   std::string profile;               ///< name in the sensor profiles
   GnssConfig config;                 ///< the profile's parameters
-  std::optional<double> off_after_s; ///< no GNSS message after this time (seed 004: fixes stop at 50 s)
+  std::optional<double> off_after_s; ///< no GNSS message after this time (Lindgren et al. 2002: fixes stop at 50 s)
 };
 
 struct UltrasonicScenario {

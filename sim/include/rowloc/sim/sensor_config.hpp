@@ -1,4 +1,4 @@
-// Named sensor error-model profiles as data (issue 3, Sensors; SPEC §8): config/sensors.json
+// Named sensor error-model profiles as data (issue 3, Sensors): config/sensors.json
 // holds one object per sensor kind, each mapping a profile name to its parameters:
 //   { "gnss": { "gnss_rtk": {...}, "gnss_sbas": {...} }, "imu": { ... },
 //     "wheel_encoder": { ... }, "steering_encoder": { ... } }

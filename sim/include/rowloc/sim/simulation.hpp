@@ -1,4 +1,4 @@
-// One simulated run of a scenario (issue 3; SPEC §8): the vehicle drives its route, every sensor
+// One simulated run of a scenario (issue 3): the vehicle drives its route, every sensor
 // samples the exact truth through its error model on its own clock, and the run writes the sensor
 // log, the ground-truth stream and two baseline estimate streams (docs/protocol.md,
 // docs/simulation-scenarios.md).

@@ -1,16 +1,16 @@
 // Terrain classes and their longitudinal slip parameters (issue 3, "Terrain patches with their own
-// slip behaviour: tiles, grass, gravel, mud at least"; SPEC §8 "terrain-dependent slip").
+// slip behaviour: tiles, grass, gravel, mud at least"; the design's "terrain-dependent slip").
 //
-// Each class carries the parameters of the Janosi-Hanamoto traction/slip curve of seed 004 eq. (21),
+// Each class carries the parameters of the Janosi-Hanamoto traction/slip curve of Lindgren et al. 2002 eq. (21),
 // written in normalized form (see wheel_slip.hpp):
 //   T(s) = T_max [1 - (B/s)(1 - exp(-s/B))],   T_max = mu_max * N * r_roll,
 // i.e. the peak traction torque is a dimensionless traction coefficient mu_max times the wheel's
 // normal load N (newton) times its rolling radius r_roll (metres). The rolling radius depends on the
-// soil (seed 004, conclusion: "effective wheel rolling radius ... depends upon soil properties"):
+// soil (Lindgren et al. 2002, conclusion: "effective wheel rolling radius ... depends upon soil properties"):
 //   r_roll = r_nominal * rolling_radius_factor.
 // Rolling resistance is a force c_rr * N opposing the motion. At constant speed the wheel must
 // deliver exactly that force, so the steady slip s* solves mu(s*) = c_rr (docs/simulation-slip.md
-// derives the shipped values from the AgriMaRo runs of seed 000 ch. 7, SPEC §9).
+// derives the shipped values from the AgriMaRo runs of Danzi 2026 ch. 7).
 //
 // The parameters are data: config/terrains.json, equal to TerrainSlipTable::Defaults() (tested).
 #pragma once

@@ -1,5 +1,5 @@
 // TerrainMap: which terrain class lies under a point of the world (issue 3, "Terrain patches with
-// their own slip behaviour"; SPEC §8 "terrain-dependent slip"). Documented in
+// their own slip behaviour"; the design's "terrain-dependent slip"). Documented in
 // docs/simulation-routes.md ("Terrain map").
 //
 // Patches are simple polygons in world ENU metres (Boost.Geometry polygons internally). A point

@@ -1,4 +1,4 @@
-// TerrainSurface: the ground height of a simulated row world (SPEC §8 "slopes"; issue 3, "World":
+// TerrainSurface: the ground height of a simulated row world (issue 3, "World":
 // "terrain with slope and undulation").
 //
 // Math: in the local ENU frame (metres), the terrain is the graph

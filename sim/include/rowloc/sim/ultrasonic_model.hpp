@@ -1,4 +1,4 @@
-// Ultrasonic rangers against the exact canopy of a RowWorld (SPEC §8 "ultrasonic noise, cone,
+// Ultrasonic rangers against the exact canopy of a RowWorld (the design's "ultrasonic noise, cone,
 // missed echoes"; issue 3, "Sensors": "0.02-4 m, 15 degree cone cast against the exact canopy
 // geometry, not voxels ... missed echoes"). Documented in docs/simulation-world.md.
 //
@@ -83,7 +83,7 @@ struct UltrasonicParams {
   double min_range_m = 0.02;                                 ///< blind zone
   double max_range_m = 4.0;
   double half_aperture_rad = 7.5 * std::numbers::pi / 180.0; ///< 15 degree cone
-  double range_sigma_m = 0.003;                              ///< sigma_us of seed 002
+  double range_sigma_m = 0.003;                              ///< sigma_us of Donati 2021
   double miss_probability = 0.0;                             ///< in [0, 1]
   bool operator==(const UltrasonicParams&) const = default;
 };

@@ -1,9 +1,9 @@
 // Exact per-wheel ground truth of the four vehicle kinds for a commanded planar body motion
-// (issue 3, "Vehicles and motion"; SPEC §6 slip, §8; derivation in docs/simulation-vehicles.md).
+// (issue 3, "Vehicles and motion"; derivation in docs/simulation-vehicles.md).
 //
-// Kinematics (rigid body, seed 000 eq. (2.2)/(4.19)): the wheel-centre velocity in the body frame is
+// Kinematics (rigid body, Danzi 2026 eq. (2.2)/(4.19)): the wheel-centre velocity in the body frame is
 //   v_w = v + yaw_rate x p_w = (v_x - r_z p_y,  v_y + r_z p_x)        (r_z = yaw rate)
-// and its acceleration relative to the ground, in body components (SPEC §10 last bullet),
+// and its acceleration relative to the ground, in body components (corrects Danzi 2026's process-model signs),
 //   a_w = (dv_x - r_z v_y - dr_z p_y - r_z^2 p_x,  dv_y + r_z v_x + dr_z p_x - r_z^2 p_y).
 // * Steered wheels (swerve, 4WS) point along v_w: delta = atan2(v_wy, v_wx), longitudinal speed
 //   |v_w|. If |delta| > max_steering_angle the wheel turns the other way (delta -+ pi) and rolls
@@ -14,7 +14,7 @@
 //   lateral wheel speed (v_y + r_z p_x = 0) and zero lateral acceleration change (dv_y + dr_z p_x = 0);
 //   otherwise MotionProblem() reports it. A track slides sideways: lateral_speed = v_y + r_z p_x.
 //
-// Quasi-static longitudinal slip (SPEC §6; seed 004 eq. (21); wheel_slip.hpp): wheel i carries the
+// Quasi-static longitudinal slip (Lindgren et al. 2002 eq. (21); wheel_slip.hpp): wheel i carries the
 // mass share m_i = m / n (centre of mass at the wheel centroid, equal static loads) and the normal
 // load N_i = m_i g. It must deliver along its heading h_i the force
 //   F_i = m_i (a_w . h_i) + c_rr N_i v_long / max(|v_long|, 0.05 m/s)
@@ -26,7 +26,7 @@
 //   omega r_roll = v/(1 - |s|) when s v > 0 (driving), v (1 - |s|) when s v < 0 (braking), so that
 //   SaeLongitudinalSlip(omega, r_roll, v) == s. At constant speed mu = c_rr: s equals
 //   LongitudinalWheelDynamics::SteadyStateSlip().
-// * Tracks (skid steer): s is the track slip i of seed 001 eq. (6), i = 1 - V_t/(omega r), computed
+// * Tracks (skid steer): s is the track slip i of Tazzari et al. n.d. eq. (6), i = 1 - V_t/(omega r), computed
 //   from eq. (7) (F = F_max[1 - K/(il)(1 - e^{-il/K})], i.e. the same curve with B = K/l) and
 //   signed like F v (i > 0: the track is driving in its direction of travel). omega r = V_t / (1 - i),
 //   eta = 1 - i (eq. (4)), so eq. (3) holds exactly:
@@ -34,7 +34,7 @@
 //   Besides acceleration and rolling resistance the tracks overcome Wong's turning-resistance moment
 //   M_r = mu_t m g l / 4 (Wong, Theory of Ground Vehicles, §7.2), applied against the yaw rate as
 //   +-M_r/B on the outer/inner track, smoothed as sign(r_z) ~ r_z / max(|r_z|, 2 * 0.05 m/s / B).
-// Deadband: for |v_long| < 0.05 m/s the slip is 0 and omega = v_long / r_roll (SPEC §6).
+// Deadband: for |v_long| < 0.05 m/s the slip is 0 and omega = v_long / r_roll (kSlipDeadbandSpeedMps).
 // Saturation: if |mu_i| > mu(1) the terrain cannot carry the force: slip = sign(mu_i) (for tracks
 // sign(F v)), traction_limited = true and torque = the demand (the wheel spins or locks). A locked
 // wheel has omega = 0; a spinning one is reported at omega r = v / (1 - kSpinningSlipForSpeed), an
@@ -71,7 +71,7 @@ struct WheelTruth {
   double wheel_angular_speed_radps = 0; ///< omega (sprocket speed for a track)
   double longitudinal_speed_mps = 0;    ///< ground speed of the wheel centre along the heading
   double lateral_speed_mps = 0;         ///< across the heading (0 for steered wheels)
-  double slip = 0;                      ///< SAE slip (wheels) or track slip i of seed 001 eq. (6) (tracks)
+  double slip = 0;                      ///< SAE slip (wheels) or track slip i of Tazzari et al. n.d. eq. (6) (tracks)
   double torque_nm = 0;                 ///< drive torque = longitudinal_force_n * rolling_radius_m
   double rolling_radius_m = 0;          ///< r_roll on the terrain under it
   TerrainClass terrain = TerrainClass::kTiles;

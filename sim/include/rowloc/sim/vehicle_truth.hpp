@@ -1,5 +1,5 @@
 // Exact ground truth of a simulated run at any time (issue 3, "exact ground truth of pose,
-// velocities and per-wheel slip"; SPEC §8). The vehicle tracks its route exactly and drives
+// velocities and per-wheel slip"). The vehicle tracks its route exactly and drives
 // forwards along it, so the body motion at time t is
 //   v_x = v(t), v_y = 0, r = kappa(s(t)) v(t), dv_x = a(t), dv_y = 0, dr = route yaw acceleration
 // (route.hpp). VehicleModel (vehicle_model.hpp) turns it into per-wheel steering, speed, slip and

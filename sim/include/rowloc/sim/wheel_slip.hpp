@@ -1,14 +1,14 @@
 // Longitudinal wheel slip: SAE slip, the Janosi-Hanamoto traction curve and its inverse, and a
 // single-wheel / point-mass longitudinal dynamics step that produces slip from wheel torque
-// (issue 3, "Longitudinal slip from wheel torque through the Janosi-Hanamoto curve"; SPEC §6, §8).
+// (issue 3, "Longitudinal slip from wheel torque through the Janosi-Hanamoto curve").
 //
-// SAE slip (SPEC §6; seed 000 ch. 7):
+// SAE slip (Danzi 2026 ch. 7):
 //   s = (omega r - v) / max(|omega r|, |v|),  0 when both |omega r| and |v| are below 0.05 m/s,
 //   saturated to [-1, 1] (omega r and v of opposite signs would give |s| up to 2).
 //
-// Janosi-Hanamoto curve (seed 004 eq. (21)), in normalized form mu(s) = T(s) / (N r_roll):
+// Janosi-Hanamoto curve (Lindgren et al. 2002 eq. (21)), in normalized form mu(s) = T(s) / (N r_roll):
 //   mu(s) = mu_max [1 - (B/s)(1 - exp(-s/B))]  for s > 0,  mu(-s) = -mu(s) (braking), mu(0) = 0.
-// mu is strictly increasing, mu'(0) = mu_max / (2B) (seed 004 eq. (23): k_s = T_max / (2B)) and
+// mu is strictly increasing, mu'(0) = mu_max / (2B) (Lindgren et al. 2002 eq. (23): k_s = T_max / (2B)) and
 // mu -> mu_max as s -> infinity; on the physical range |s| <= 1 its largest value is mu(1).
 //
 // Dynamics of one wheel carrying the mass share m (normal load N = m g) on flat ground:
@@ -28,7 +28,7 @@
 
 namespace rowloc::sim {
 
-/// Speed under which SAE slip is defined as 0 (SPEC §6; seed 000 ch. 7: 0.05 m/s).
+/// Speed under which SAE slip is defined as 0 (Danzi 2026 ch. 7: 0.05 m/s).
 inline constexpr double kSlipDeadbandSpeedMps = 0.05;
 
 /// SAE longitudinal slip in [-1, 1]. rolling_radius_m > 0. Throws std::invalid_argument on a
