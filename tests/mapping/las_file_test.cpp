@@ -5,6 +5,7 @@
 #include "rowloc/mapping/las_file.hpp"
 
 #include "rowloc/mapping/point_cloud.hpp"
+#include "point_cloud_errors.hpp"
 #include "test_support.hpp"
 
 #include <gmock/gmock.h>
@@ -273,26 +274,15 @@ TEST(ReadPointCloud, KeepsMillimetresOfUtmCoordinatesAfterTheOriginIsSubtracted)
   EXPECT_GT(std::abs(static_cast<double>(static_cast<float>(northing)) - northing), 0.001);
 }
 
-/// Expects ReadPointCloud(path) to throw PointCloudError naming the file and containing `reason`.
-void ExpectLoaderError(const std::filesystem::path& path, const std::string& reason) {
-  try {
-    ReadPointCloud(path);
-    ADD_FAILURE() << "no error for " << path;
-  } catch (const PointCloudError& e) {
-    EXPECT_THAT(e.what(), HasSubstr(path.string()));
-    EXPECT_THAT(e.what(), HasSubstr(reason));
-  }
-}
-
 TEST(ReadPointCloud, RefusesLasEdgeCasesWithItsOwnMessages) {
   test::ScratchDir dir;
-  ExpectLoaderError(dir / "absent.las", "no such file");
+  test::ExpectReadError(dir / "absent.las", "no such file");
   std::filesystem::create_directory(dir / "folder.las");
-  ExpectLoaderError(dir / "folder.las", "not a regular file");
+  test::ExpectReadError(dir / "folder.las", "not a regular file");
   WriteBytes(dir / "empty.las", EncodeLas(LasCloud{}, {}));
-  ExpectLoaderError(dir / "empty.las", "the file holds no points");
+  test::ExpectReadError(dir / "empty.las", "the file holds no points");
   WriteBytes(dir / "text.las", "1 2 3\n");
-  ExpectLoaderError(dir / "text.las", "not a LAS file");
+  test::ExpectReadError(dir / "text.las", "not a LAS file");
 }
 
 // ---- Refusals ----

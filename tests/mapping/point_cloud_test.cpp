@@ -2,6 +2,7 @@
 // binary PLY and PCD, hand-written ASCII fixtures, and every rejected input.
 #include "rowloc/mapping/point_cloud.hpp"
 
+#include "point_cloud_errors.hpp"
 #include "test_support.hpp"
 
 #include <gmock/gmock.h>
@@ -33,19 +34,6 @@ PointCloud RandomCloud(std::size_t count, unsigned seed) {
     cloud.points_m.emplace_back(coordinate(rng), coordinate(rng), coordinate(rng) / 7.0);
   }
   return cloud;
-}
-
-/// Expects ReadPointCloud(path) to throw PointCloudError whose message names the file and
-/// contains `reason`.
-void ExpectReadError(const std::filesystem::path& path, const std::string& reason) {
-  try {
-    ReadPointCloud(path);
-    ADD_FAILURE() << "no error for " << path;
-  } catch (const PointCloudError& e) {
-    EXPECT_THAT(e.what(), HasSubstr(path.string()));
-    EXPECT_THAT(e.what(), HasSubstr(reason));
-    EXPECT_EQ(e.path(), path);
-  }
 }
 
 class PointCloudRoundTrip : public ::testing::TestWithParam<std::string> {};
@@ -134,21 +122,21 @@ TEST(ReadPointCloud, ReadsAsciiPcdWithExtraField) {
 
 TEST(ReadPointCloud, RejectsMissingFile) {
   test::ScratchDir dir;
-  ExpectReadError(dir / "absent.ply", "no such file");
-  ExpectReadError(dir / "absent.pcd", "no such file");
+  test::ExpectReadError(dir / "absent.ply", "no such file");
+  test::ExpectReadError(dir / "absent.pcd", "no such file");
 }
 
 TEST(ReadPointCloud, RejectsADirectory) {
   test::ScratchDir dir;
   std::filesystem::create_directory(dir / "folder.ply");
-  ExpectReadError(dir / "folder.ply", "not a regular file");
+  test::ExpectReadError(dir / "folder.ply", "not a regular file");
 }
 
 TEST(ReadPointCloud, RejectsUnknownExtension) {
   test::ScratchDir dir;
   for (const std::string name : {"cloud.xyz", "cloud.txt", "cloud"}) {  // .las: las_file_test.cpp
     WriteText(dir / name, "1 2 3\n");
-    ExpectReadError(dir / name, "unknown extension");
+    test::ExpectReadError(dir / name, "unknown extension");
   }
 }
 
@@ -157,16 +145,16 @@ TEST(ReadPointCloud, RejectsGarbageContent) {
   const std::string garbage = "this is not a point cloud\n\x01\x02\x03 binary junk \xff\xfe\n";
   WriteText(dir / "garbage.ply", garbage);
   WriteText(dir / "garbage.pcd", garbage);
-  ExpectReadError(dir / "garbage.ply", "not a PLY file (the first line is not 'ply')");
-  ExpectReadError(dir / "garbage.pcd", "line 1: unknown PCD header key 'this'");  // PCL's parser accepts anything
+  test::ExpectReadError(dir / "garbage.ply", "not a PLY file (the first line is not 'ply')");
+  test::ExpectReadError(dir / "garbage.pcd", "line 1: unknown PCD header key 'this'");  // PCL's parser accepts anything
 }
 
 TEST(ReadPointCloud, RejectsEmptyFiles) {
   test::ScratchDir dir;
   WriteText(dir / "empty.ply", "");
   WriteText(dir / "empty.pcd", "");
-  ExpectReadError(dir / "empty.ply", "not a PLY file");
-  ExpectReadError(dir / "empty.pcd", "no DATA line");
+  test::ExpectReadError(dir / "empty.ply", "not a PLY file");
+  test::ExpectReadError(dir / "empty.pcd", "no DATA line");
 }
 
 TEST(ReadPointCloud, RejectsHeaderOnlyPly) {
@@ -174,7 +162,7 @@ TEST(ReadPointCloud, RejectsHeaderOnlyPly) {
   WriteText(dir / "header_only.ply",
             "ply\nformat ascii 1.0\nelement vertex 0\n"
             "property float x\nproperty float y\nproperty float z\nend_header\n");
-  ExpectReadError(dir / "header_only.ply", "holds no points");
+  test::ExpectReadError(dir / "header_only.ply", "holds no points");
 }
 
 TEST(ReadPointCloud, RejectsHeaderOnlyPcd) {
@@ -182,7 +170,7 @@ TEST(ReadPointCloud, RejectsHeaderOnlyPcd) {
   WriteText(dir / "header_only.pcd",
             "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
             "WIDTH 0\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 0\nDATA ascii\n");
-  ExpectReadError(dir / "header_only.pcd", "holds no points");
+  test::ExpectReadError(dir / "header_only.pcd", "holds no points");
 }
 
 TEST(ReadPointCloud, RejectsPcdWithoutDataLine) {
@@ -190,7 +178,7 @@ TEST(ReadPointCloud, RejectsPcdWithoutDataLine) {
   WriteText(dir / "no_data.pcd",
             "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
             "WIDTH 1\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\n1 2 3\n");
-  ExpectReadError(dir / "no_data.pcd", "line 10: a number where a header key is expected: the PCD header has no DATA line");
+  test::ExpectReadError(dir / "no_data.pcd", "line 10: a number where a header key is expected: the PCD header has no DATA line");
 }
 
 class TruncatedCloud : public ::testing::TestWithParam<std::string> {};
@@ -216,7 +204,7 @@ TEST(ReadPointCloud, RejectsCloudWithoutZ) {
   WriteText(dir / "flat.pcd",
             "VERSION 0.7\nFIELDS x y\nSIZE 4 4\nTYPE F F\nCOUNT 1 1\n"
             "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n1 2\n3 4\n");
-  ExpectReadError(dir / "flat.pcd", "no 'z' field");
+  test::ExpectReadError(dir / "flat.pcd", "no 'z' field");
 }
 
 TEST(ReadPointCloud, RejectsNonFinitePointsAndCountsThem) {
@@ -225,7 +213,7 @@ TEST(ReadPointCloud, RejectsNonFinitePointsAndCountsThem) {
             "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
             "WIDTH 5\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 5\nDATA ascii\n"
             "1 2 3\nnan 0 0\n4 5 6\n0 0 nan\n7 8 9\n");
-  ExpectReadError(dir / "nan.pcd", "2 of 5 points have non-finite");
+  test::ExpectReadError(dir / "nan.pcd", "2 of 5 points have non-finite");
 }
 
 TEST(ReadPointCloud, RejectsNonFinitePointsInBinaryPly) {
@@ -238,7 +226,7 @@ TEST(ReadPointCloud, RejectsNonFinitePointsInBinaryPly) {
            "property double x\nproperty double y\nproperty double z\nend_header\n";
     out.write(reinterpret_cast<const char*>(values), sizeof values);
   }
-  ExpectReadError(path, "1 of 2 points have non-finite");
+  test::ExpectReadError(path, "1 of 2 points have non-finite");
 }
 
 TEST(WritePointCloud, RejectsBadInput) {

@@ -143,24 +143,6 @@ TEST(DispatcherSessions, AJournalResumesTheSessionBitForBit) {
   EXPECT_EQ(third.ResumeJournals(problems), 0u);  // closed sessions stay closed
 }
 
-TEST(DispatcherSessions, AnUnterminatedLastJournalLineIsCutOnResume) {
-  rowloc::test::ScratchDir dir;
-  ServiceSettings settings = SourceTreeSettings();
-  settings.journal_dir = dir.path();
-  {
-    Dispatcher first(settings);
-    TestClient client(first);
-    client.Send(OpenTilesSession("tiles"));
-    Stream(client, "tiles", 1, 50);
-  }
-  std::ofstream(dir / "tiles.ndjson", std::ios::app) << R"({"type":"imu","t":9,"sens)";
-  Dispatcher second(settings);
-  std::vector<std::string> problems;
-  EXPECT_EQ(second.ResumeJournals(problems), 1u);
-  ASSERT_EQ(problems.size(), 1u);
-  EXPECT_NE(problems[0].find("unterminated"), std::string::npos);
-}
-
 /// A journal directory with the session "tiles" left open after 50 messages (as a kill -9 leaves it).
 ServiceSettings JournalWithOpenSession(const rowloc::test::ScratchDir& dir) {
   ServiceSettings settings = SourceTreeSettings();
@@ -170,6 +152,17 @@ ServiceSettings JournalWithOpenSession(const rowloc::test::ScratchDir& dir) {
   client.Send(OpenTilesSession("tiles"));
   Stream(client, "tiles", 1, 50);
   return settings;
+}
+
+TEST(DispatcherSessions, AnUnterminatedLastJournalLineIsCutOnResume) {
+  rowloc::test::ScratchDir dir;
+  const ServiceSettings settings = JournalWithOpenSession(dir);
+  std::ofstream(dir / "tiles.ndjson", std::ios::app) << R"({"type":"imu","t":9,"sens)";
+  Dispatcher second(settings);
+  std::vector<std::string> problems;
+  EXPECT_EQ(second.ResumeJournals(problems), 1u);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_NE(problems[0].find("unterminated"), std::string::npos);
 }
 
 /// The problems of resuming the journals of `settings` (none resumed).
