@@ -41,27 +41,29 @@ TEST(ServiceSettings, FileOverridesEveryKeyItNames) {
   EXPECT_NO_THROW(ValidateServiceSettings(s));
 }
 
+/// Expects the settings file `text` to be refused (at load or validation) with `fragment` in the message.
+void ExpectRefused(const rowloc::test::ScratchDir& dir, const std::string& text, const std::string& fragment) {
+  try {
+    ValidateServiceSettings(LoadServiceSettings(Write(dir, text)));
+    ADD_FAILURE() << "accepted " << text;
+  } catch (const ServiceSettingsError& e) {
+    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+  }
+}
+
 TEST(ServiceSettings, BadFilesNameTheirKey) {
   rowloc::test::ScratchDir dir;
-  const auto refused = [&](const std::string& text, const std::string& fragment) {
-    try {
-      ValidateServiceSettings(LoadServiceSettings(Write(dir, text)));
-      ADD_FAILURE() << "accepted " << text;
-    } catch (const ServiceSettingsError& e) {
-      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    }
-  };
-  refused(R"({"prot":1})", "unknown key \"prot\"");
-  refused(R"({"port":"80"})", "port");
-  refused(R"({"port":70000})", "port");
-  refused(R"({"threads":0})", "threads");
-  refused(R"({"fsync":"sometimes"})", "fsync");
-  refused(R"({"max_line_bytes":10})", "max_line_bytes");
-  refused(R"({"max_queue_lines":-1})", "max_queue_lines");
-  refused(R"({"reorder_window_s":10})", "reorder_window_s");
-  refused(R"({"listen":"0.0.0.0"})", "token file");
-  refused(R"([1])", "JSON object");
-  refused(R"({"port":)", "not valid JSON");
+  ExpectRefused(dir, R"({"prot":1})", "unknown key \"prot\"");
+  ExpectRefused(dir, R"({"port":"80"})", "port");
+  ExpectRefused(dir, R"({"port":70000})", "port");
+  ExpectRefused(dir, R"({"threads":0})", "threads");
+  ExpectRefused(dir, R"({"fsync":"sometimes"})", "fsync");
+  ExpectRefused(dir, R"({"max_line_bytes":10})", "max_line_bytes");
+  ExpectRefused(dir, R"({"max_queue_lines":-1})", "max_queue_lines");
+  ExpectRefused(dir, R"({"reorder_window_s":10})", "reorder_window_s");
+  ExpectRefused(dir, R"({"listen":"0.0.0.0"})", "token file");
+  ExpectRefused(dir, R"([1])", "JSON object");
+  ExpectRefused(dir, R"({"port":)", "not valid JSON");
   EXPECT_THROW(LoadServiceSettings(dir.path()), ServiceSettingsError);  // a directory
   EXPECT_THROW(LoadServiceSettings(dir / "missing.json"), ServiceSettingsError);
 }
@@ -74,19 +76,11 @@ TEST(ServiceSettings, LiveViewIsOffByDefaultAndItsKeysHaveDomains) {
   EXPECT_EQ(on.live_view_rate_hz, 5.0);
   EXPECT_NO_THROW(ValidateServiceSettings(on));
   EXPECT_EQ(LoadServiceSettings(Write(dir, R"({"http_port":null})")).http_port, -1);
-  const auto refused = [&](const std::string& text, const std::string& fragment) {
-    try {
-      ValidateServiceSettings(LoadServiceSettings(Write(dir, text)));
-      ADD_FAILURE() << "accepted " << text;
-    } catch (const ServiceSettingsError& e) {
-      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-    }
-  };
-  refused(R"({"http_port":70000})", "http_port");
-  refused(R"({"http_port":-5})", "http_port");
-  refused(R"({"http_port":"8080"})", "http_port");
-  refused(R"({"live_view_rate_hz":0})", "live_view_rate_hz");
-  refused(R"({"live_view_rate_hz":"fast"})", "live_view_rate_hz");
+  ExpectRefused(dir, R"({"http_port":70000})", "http_port");
+  ExpectRefused(dir, R"({"http_port":-5})", "http_port");
+  ExpectRefused(dir, R"({"http_port":"8080"})", "http_port");
+  ExpectRefused(dir, R"({"live_view_rate_hz":0})", "live_view_rate_hz");
+  ExpectRefused(dir, R"({"live_view_rate_hz":"fast"})", "live_view_rate_hz");
 }
 
 TEST(ServiceSettings, OtherAddressesNeedAToken) {
