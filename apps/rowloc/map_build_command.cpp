@@ -2,6 +2,7 @@
 // `rowloc map compare` (a built map against the true one: distances, rows found, missed, invented).
 #include "commands.hpp"
 #include "option_checks.hpp"
+#include "progress_bar.hpp"
 
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
@@ -11,6 +12,8 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+
+#include <unistd.h>
 
 #include <memory>
 #include <stdexcept>
@@ -27,6 +30,7 @@ struct BuildOptions {
   std::vector<double> origin;  // lat, lon, alt
   std::string config_path;
   double octomap_resolution_m = 0.0;  // 0: no OctoMap
+  std::string progress = "auto";      // auto (when stderr is a terminal), always, never
 };
 
 void RunBuild(const BuildOptions& o) {
@@ -53,7 +57,15 @@ void RunBuild(const BuildOptions& o) {
     outputs.push_back({"--output", (dir / name).string()});
   }
   CheckCommandFiles({{"survey", o.survey_path}, {"--config", o.config_path}}, outputs);
+  std::unique_ptr<ProgressBar> bar;
+  if (o.progress == "always" || (o.progress == "auto" && isatty(STDERR_FILENO) != 0)) {
+    bar = std::make_unique<ProgressBar>(stderr);
+    request.progress = [&bar](std::string_view stage, std::size_t done, std::size_t total) {
+      bar->Update(stage, done, total);
+    };
+  }
   const mapping::MapBuildResult result = mapping::RunMapBuild(request);
+  bar.reset();  // ends the progress line before the summary
   for (const auto& stage : result.stages) {
     spdlog::info("{:<44} {:>8} {:<12} {:.3f} s", stage.name, stage.points, stage.unit.substr(0, 12), stage.seconds);
   }
@@ -120,6 +132,10 @@ void RegisterMapBuildCommands(CLI::App& app) {
   b->add_option("--octomap", build->octomap_resolution_m,
                 "Also write canopy.bt, an OctoMap of the canopy points in the map frame, voxels of this size [m]")
       ->check(PositiveNumber());
+  b->add_option("--progress", build->progress,
+                "Progress bars on stderr: auto (when stderr is a terminal), always, never")
+      ->check(CLI::IsMember({"auto", "always", "never"}))
+      ->default_str("auto");
   b->callback([build] { RunReportingInputErrors("map build", [&build] { RunBuild(*build); }); });
 
   auto compare = std::make_shared<CompareOptions>();

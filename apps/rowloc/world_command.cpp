@@ -43,6 +43,8 @@ struct WorldCommandOptions {
   double survey_spacing_m = 0.05;
   double survey_noise_m = 0.005;
   double survey_dropout = 0.0;
+  double survey_outliers = 0.0;
+  bool survey_one_sided = false;
   bool survey_terrain = false;
   double terrain_spacing_m = 0.1;
   double octomap_resolution_m = 0.05;
@@ -131,6 +133,8 @@ mapping::PointCloud SampleSurveyCloud(const sim::RowWorld& world, const WorldCom
   params.spacing_m = o.survey_spacing_m;
   params.noise_sigma_m = o.survey_noise_m;
   params.dropout_fraction = o.survey_dropout;
+  params.outlier_fraction = o.survey_outliers;
+  params.one_sided = o.survey_one_sided;
   params.include_terrain = o.survey_terrain;
   params.terrain_spacing_m = o.terrain_spacing_m;
   params.seed = o.seed;
@@ -214,9 +218,10 @@ void RunWorld(WorldCommandOptions o) {
   fmt::print("  {}: {} parts at {} m above the terrain (step {} m)\n", map_path.string(), map.rows.size(),
              o.slice_height_m, o.step_m);
   if (!o.no_survey)
-    fmt::print("  {}: {} points (spacing {} m, noise {} m, dropout {}, terrain {}, seed {})\n", survey_path.string(),
-               survey.points_m.size(), o.survey_spacing_m, o.survey_noise_m, o.survey_dropout,
-               o.survey_terrain ? "yes" : "no", o.seed);
+    fmt::print("  {}: {} points (spacing {} m, noise {} m, dropout {}, outliers {}, {}, terrain {}, seed {})\n",
+               survey_path.string(), survey.points_m.size(), o.survey_spacing_m, o.survey_noise_m, o.survey_dropout,
+               o.survey_outliers, o.survey_one_sided ? "one-sided" : "both faces", o.survey_terrain ? "yes" : "no",
+               o.seed);
   if (!o.no_octomap) {
     const OctoMapCheck& c = octomap.check;
     fmt::print("  {}: {} occupied voxels of {} m (from {} noise-free canopy shell points)\n", octomap_path.string(),
@@ -247,6 +252,12 @@ void RegisterWorldCommand(CLI::App& app) {
   cmd->add_option("--survey-dropout", o->survey_dropout, "Fraction of survey points dropped")
       ->check(FiniteInRange(0.0, 0.99, "RANGE"))
       ->capture_default_str();
+  cmd->add_option("--survey-outliers", o->survey_outliers,
+                  "Outliers added, as a fraction of the survey's points, uniform in its bounding box grown by 1 m")
+      ->check(FiniteInRange(0.0, 0.5, "RANGE"))
+      ->capture_default_str();
+  cmd->add_flag("--survey-one-sided", o->survey_one_sided,
+                "Leave out the right face of every row (a scanner that saw each row from one side)");
   cmd->add_flag("--survey-terrain", o->survey_terrain, "Also sample the ground not covered by canopy");
   cmd->add_option("--terrain-spacing", o->terrain_spacing_m, "Survey point spacing on the ground [m]")
       ->check(FiniteInRange(1e-3, 100.0, "RANGE"))

@@ -267,19 +267,22 @@ LasHeader ReadLasHeader(std::istream& in, const std::filesystem::path& name) {
   return h;
 }
 
-LasCloud ReadLas(std::istream& in, const std::filesystem::path& name) {
-  LasCloud cloud;
-  cloud.header = ReadLasHeader(in, name);
-  const LasHeader& h = cloud.header;
+void ForEachLasChunk(std::istream& in, const LasHeader& header, const std::filesystem::path& name,
+                     std::size_t chunk_points, const std::function<void(const LasCloud&)>& visit) {
+  if (chunk_points == 0) throw std::invalid_argument("ForEachLasChunk: chunk_points must be positive");
+  const LasHeader& h = header;
   const std::size_t count = static_cast<std::size_t>(h.point_count);
+  LasCloud chunk;
+  chunk.header = header;
+  const std::size_t capacity = std::min(count, chunk_points);
   try {
-    cloud.points_m.reserve(count);
-    cloud.intensity.reserve(count);
-    cloud.classification.reserve(count);
+    chunk.points_m.reserve(capacity);
+    chunk.intensity.reserve(capacity);
+    chunk.classification.reserve(capacity);
   } catch (const std::bad_alloc&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(capacity) + " points");
   } catch (const std::length_error&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(capacity) + " points");
   }
   in.clear();
   in.seekg(static_cast<std::streamoff>(h.offset_to_point_data), std::ios::beg);
@@ -298,24 +301,69 @@ LasCloud ReadLas(std::istream& in, const std::filesystem::path& name) {
     }
     for (std::size_t i = 0; i < n; ++i) {
       const unsigned char* p = block.data() + i * record;
-      cloud.points_m.emplace_back(static_cast<double>(I32(p)) * h.scale.x() + h.offset.x(),
+      chunk.points_m.emplace_back(static_cast<double>(I32(p)) * h.scale.x() + h.offset.x(),
                                   static_cast<double>(I32(p + 4)) * h.scale.y() + h.offset.y(),
                                   static_cast<double>(I32(p + 8)) * h.scale.z() + h.offset.z());
-      cloud.intensity.push_back(U16(p + 12));
-      cloud.classification.push_back(legacy_format ? static_cast<std::uint8_t>(p[15] & 0x1F) : p[16]);
+      chunk.intensity.push_back(U16(p + 12));
+      chunk.classification.push_back(legacy_format ? static_cast<std::uint8_t>(p[15] & 0x1F) : p[16]);
+      if (chunk.points_m.size() == chunk_points) {
+        visit(chunk);
+        chunk.points_m.clear();
+        chunk.intensity.clear();
+        chunk.classification.clear();
+      }
     }
   }
+  if (!chunk.points_m.empty()) visit(chunk);
+}
+
+LasCloud ReadLas(std::istream& in, const std::filesystem::path& name) {
+  LasCloud cloud;
+  cloud.header = ReadLasHeader(in, name);
+  const std::size_t count = static_cast<std::size_t>(cloud.header.point_count);
+  try {
+    cloud.points_m.reserve(count);
+    cloud.intensity.reserve(count);
+    cloud.classification.reserve(count);
+  } catch (const std::bad_alloc&) {
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+  } catch (const std::length_error&) {
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+  }
+  ForEachLasChunk(in, cloud.header, name, std::size_t{1} << 20, [&cloud](const LasCloud& chunk) {
+    cloud.points_m.insert(cloud.points_m.end(), chunk.points_m.begin(), chunk.points_m.end());
+    cloud.intensity.insert(cloud.intensity.end(), chunk.intensity.begin(), chunk.intensity.end());
+    cloud.classification.insert(cloud.classification.end(), chunk.classification.begin(), chunk.classification.end());
+  });
   return cloud;
 }
 
-LasCloud ReadLasFile(const std::filesystem::path& path) {
+namespace {
+
+std::ifstream OpenLasFile(const std::filesystem::path& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw PointCloudError(path, "no such file");
   if (!std::filesystem::is_regular_file(path, ec)) throw PointCloudError(path, "not a regular file");
   if (Lower(path.extension().string()) == ".laz") throw PointCloudError(path, LazRefusal(path) + " (the extension is .laz)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw PointCloudError(path, std::string("cannot open: ") + std::strerror(errno));
+  return in;
+}
+
+}  // namespace
+
+LasCloud ReadLasFile(const std::filesystem::path& path) {
+  std::ifstream in = OpenLasFile(path);
   return ReadLas(in, path);
+}
+
+std::uint64_t ForEachLasFileChunk(const std::filesystem::path& path, std::size_t chunk_points,
+                                  const std::function<void(const LasCloud&)>& visit) {
+  std::ifstream in = OpenLasFile(path);
+  const LasHeader header = ReadLasHeader(in, path);
+  if (header.point_count == 0) throw PointCloudError(path, "the file holds no points");
+  ForEachLasChunk(in, header, path, chunk_points, visit);
+  return header.point_count;
 }
 
 PointCloud ReadLasPointCloud(const std::filesystem::path& path) {

@@ -35,6 +35,9 @@ struct Field {
 
 const std::vector<Field>& Fields() {
   static const std::vector<Field> fields = {
+      ROWLOC_NUMBER("tiles", tiles.size_m, "size_m", 5.0, 10000.0),
+      ROWLOC_NUMBER("tiles", tiles.overlap_m, "overlap_m", 0.0, 100.0),
+      ROWLOC_INTEGER("tiles", tiles.threads, "threads", 0, 64),
       ROWLOC_NUMBER("clean", clean.voxel_size_m, "voxel_size_m", 0.0, 1.0),
       ROWLOC_INTEGER("clean", clean.outlier_neighbours, "outlier_neighbours", 0, 200),
       ROWLOC_NUMBER("clean", clean.outlier_stddev_factor, "outlier_stddev_factor", 0.1, 100.0),
@@ -42,6 +45,7 @@ const std::vector<Field>& Fields() {
       ROWLOC_NUMBER("terrain", terrain.classification_radius_m, "classification_radius_m", 0.1, 100.0),
       ROWLOC_NUMBER("terrain", terrain.ground_tolerance_m, "ground_tolerance_m", 0.001, 10.0),
       ROWLOC_NUMBER("terrain", terrain.ground_thickness_m, "ground_thickness_m", 0.0, 1.0),
+      ROWLOC_INTEGER("terrain", terrain.min_ground_points, "min_ground_points", 1, 1000),
       ROWLOC_INTEGER("terrain", terrain.smoothing_passes, "smoothing_passes", 0, 20),
       ROWLOC_NUMBER("band", band.reference_height_m, "reference_height_m", 0.0, 20.0),
       ROWLOC_NUMBER("band", band.band_half_width_m, "band_half_width_m", 0.005, 10.0),
@@ -66,7 +70,7 @@ const std::vector<Field>& Fields() {
 #undef ROWLOC_INTEGER
 
 const std::vector<const char*>& Sections() {
-  static const std::vector<const char*> sections = {"clean", "terrain", "band", "rows", "outline"};
+  static const std::vector<const char*> sections = {"tiles", "clean", "terrain", "band", "rows", "outline"};
   return sections;
 }
 
@@ -87,6 +91,11 @@ std::optional<std::string> ValidateMapBuildConfig(const MapBuildConfig& config) 
       return std::string(f.section) + "." + f.key + ": must be in [" + FormatNumber(f.low) + ", " +
              FormatNumber(f.high) + "], got " + FormatNumber(value);
     }
+  }
+  // A tile's DTM near its core's edge must see the ground plane's whole neighbourhood.
+  if (config.tiles.overlap_m < config.terrain.classification_radius_m) {
+    return "tiles.overlap_m: must be at least terrain.classification_radius_m (" +
+           FormatNumber(config.terrain.classification_radius_m) + "), got " + FormatNumber(config.tiles.overlap_m);
   }
   return std::nullopt;
 }
@@ -118,6 +127,7 @@ MapBuildConfig LoadMapBuildConfig(const std::filesystem::path& path) {
     part.RejectUnknownKeys();
   }
   reader.RejectUnknownKeys();
+  if (const auto problem = ValidateMapBuildConfig(config)) throw MapBuildConfigError(source + ": " + *problem);
   return config;
 }
 

@@ -5,10 +5,11 @@
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
-#include "rowloc/mapping/cloud_cleaning.hpp"
 #include "rowloc/mapping/polyline_simplification.hpp"
 #include "rowloc/mapping/row_outline.hpp"
 #include "rowloc/mapping/row_segmentation.hpp"
+#include "rowloc/mapping/tile_processing.hpp"
+#include "rowloc/mapping/tiled_cloud.hpp"
 
 #include <GeographicLib/UTMUPS.hpp>
 #include <fmt/format.h>
@@ -93,45 +94,46 @@ MapBuildResult BuildRowMap(const PointCloud& cloud, const MapBuildConfig& config
                            const Georeference& georeference, bool keep_canopy) {
   if (cloud.points_m.empty()) throw std::invalid_argument("the cloud has no points");
   if (const auto problem = ValidateMapBuildConfig(config)) throw std::invalid_argument("configuration: " + *problem);
+  TiledCloud tiled(config.tiles.size_m, config.tiles.overlap_m);
+  tiled.Add(cloud.points_m);
+  return BuildRowMap(tiled, config, georeference, keep_canopy);
+}
+
+MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, const Georeference& georeference,
+                           bool keep_canopy, const ProgressCallback& progress) {
+  if (tiled.point_count() == 0) throw std::invalid_argument("the cloud has no points");
+  if (const auto problem = ValidateMapBuildConfig(config)) throw std::invalid_argument("configuration: " + *problem);
   MapBuildResult result;
-  result.points_in = cloud.points_m.size();
+  result.points_in = tiled.point_count();
 
   // Offset: keeps the working coordinates small (UTM northings are ~5e6 m).
-  Eigen::Vector2d lo = cloud.points_m.front().head<2>();
-  Eigen::Vector2d hi = lo;
-  for (const auto& p : cloud.points_m) {
-    lo = lo.cwiseMin(p.head<2>());
-    hi = hi.cwiseMax(p.head<2>());
-  }
+  const Eigen::Vector2d lo = tiled.min_m();
+  const Eigen::Vector2d hi = tiled.max_m();
   result.offset_m = Eigen::Vector2d(std::floor(lo.x()), std::floor(lo.y()));
-  PointCloud local;
-  local.points_m.reserve(cloud.points_m.size());
-  for (const auto& p : cloud.points_m) {
-    local.points_m.emplace_back(p.x() - result.offset_m.x(), p.y() - result.offset_m.y(), p.z());
-  }
 
-  // 1. Clean.
-  CleanResult clean = CleanCloud(local, config.clean);
-  PointCloud().points_m.swap(local.points_m);
-  result.stages.push_back({"clean: voxel downsampling", clean.points_after_voxel, "points", clean.voxel_seconds});
-  result.stages.push_back({"clean: outlier removal", clean.cloud.points_m.size(), "points", clean.outlier_seconds});
-  if (clean.cloud.points_m.empty()) throw std::invalid_argument("no points left after cleaning");
-
-  // 2. Terrain.
-  auto start = Clock::now();
-  result.terrain = BuildTerrainGrid(clean.cloud, config.terrain);
+  // 1-3. Clean, terrain, normalize: per tile.
+  SurveyProducts survey = ProcessTiles(tiled, result.offset_m, config, keep_canopy, progress);
+  result.tiles = survey.tiles;
+  result.tile_threads = survey.threads;
+  result.largest_tile_points = survey.largest_tile_points;
+  const std::string per_tile = fmt::format("(summed over {} tiles)", survey.tiles);
+  result.stages.push_back({"tiles: steps 1-3", survey.tiles,
+                           fmt::format("tiles, {} threads, wall clock", survey.threads), survey.wall_seconds});
+  result.stages.push_back({"clean: voxel downsampling", survey.points_after_voxel, "points " + per_tile,
+                           survey.voxel_seconds});
+  result.stages.push_back({"clean: outlier removal", survey.points_cleaned, "points " + per_tile,
+                           survey.outlier_seconds});
+  if (survey.points_cleaned == 0) throw std::invalid_argument("no points left after cleaning");
+  result.terrain = std::move(survey.terrain);
   result.stages.push_back({"terrain: ground cells", result.terrain->GroundCellCount(),
-                           fmt::format("of {} cells", result.terrain->heights_m().size()), SecondsSince(start)});
-
-  // 3. Normalize: heights above the terrain, the canopy band.
-  start = Clock::now();
-  const std::vector<double> heights = HeightsAboveTerrain(clean.cloud, *result.terrain);
-  const std::vector<Eigen::Vector2d> band = SelectCanopyBand(clean.cloud, heights, config.band);
+                           fmt::format("of {} cells {}", result.terrain->heights_m().size(), per_tile),
+                           survey.terrain_seconds});
+  const std::vector<Eigen::Vector2d> band = std::move(survey.band_m);
   result.band_points = band.size();
-  result.stages.push_back({"normalize: canopy band", band.size(), "points", SecondsSince(start)});
+  result.stages.push_back({"normalize: canopy band", band.size(), "points " + per_tile, survey.normalize_seconds});
+  auto start = Clock::now();
 
   // 4. Rows.
-  start = Clock::now();
   RowDetection detection = DetectRows(band, config.rows);
   result.parts_dropped = detection.parts_dropped;
   result.links = detection.links;
@@ -232,7 +234,7 @@ MapBuildResult BuildRowMap(const PointCloud& cloud, const MapBuildConfig& config
     result.message = fmt::format(
         "no rows found: {} of {} cleaned points in the band {:.2f} +- {:.2f} m above the terrain, {} parts "
         "found, {} dropped as clutter (rows.min_part_points {}, rows.min_part_length_m {})",
-        band.size(), clean.cloud.points_m.size(), config.band.reference_height_m, config.band.band_half_width_m,
+        band.size(), survey.points_cleaned, config.band.reference_height_m, config.band.band_half_width_m,
         detection.parts_found, detection.parts_dropped, config.rows.min_part_points, config.rows.min_part_length_m);
   } else {
     result.message = fmt::format("{} rows ({} parts, {} vertices)", result.rows, map.rows.size(), map_vertices);
@@ -247,20 +249,14 @@ MapBuildResult BuildRowMap(const PointCloud& cloud, const MapBuildConfig& config
 
   if (keep_canopy) {
     const double z0 = frame ? origin.altitude_m : 0.0;
-    for (std::size_t i = 0; i < clean.cloud.points_m.size(); ++i) {
-      if (heights[i] <= config.terrain.ground_tolerance_m) continue;
-      const Eigen::Vector3d& p = clean.cloud.points_m[i];
+    result.canopy_m.points_m.reserve(survey.canopy_m.size());
+    for (const Eigen::Vector3d& p : survey.canopy_m) {
       const Eigen::Vector2d xy = to_map(p.head<2>());
       result.canopy_m.points_m.emplace_back(xy.x(), xy.y(), p.z() - z0);
     }
   }
-
-  // A sample of the cleaned cloud for the SVG (at most ~20000 points).
-  const std::size_t stride = std::max<std::size_t>(1, clean.cloud.points_m.size() / 20000);
-  for (std::size_t i = 0; i < clean.cloud.points_m.size(); i += stride) {
-    result.cloud_sample_m.push_back(to_map(clean.cloud.points_m[i].head<2>()));
-    result.cloud_sample_height_m.push_back(heights[i]);
-  }
+  for (const auto& p : survey.sample_m) result.cloud_sample_m.push_back(to_map(p));
+  result.cloud_sample_height_m = std::move(survey.sample_height_m);
   return result;
 }
 
@@ -324,17 +320,35 @@ std::string FormatMapSvg(const MapBuildResult& result) {
 }
 
 MapBuildResult RunMapBuild(const MapBuildRequest& request) {
-  auto start = Clock::now();
-  const PointCloud cloud = ReadPointCloud(request.survey_path);
-  const double read_seconds = SecondsSince(start);
-  MapBuildResult result =
-      BuildRowMap(cloud, request.config, request.georeference, request.octomap_resolution_m.has_value());
-  result.stages.insert(result.stages.begin(), StageReport{"read", cloud.points_m.size(), "points", read_seconds});
-
-  start = Clock::now();
+  const auto wall_start = Clock::now();
+  if (const auto problem = ValidateMapBuildConfig(request.config)) {
+    throw std::invalid_argument("configuration: " + *problem);
+  }
   std::error_code ec;
   std::filesystem::create_directories(request.output_dir, ec);
   if (ec) throw std::system_error(ec, "cannot create " + request.output_dir.string());
+
+  // Read the survey into tiles spilled to OUTDIR/.rowloc-tiles (a stale one from an interrupted run
+  // is ours to remove); memory while reading: one chunk plus each tile's write buffer.
+  auto start = Clock::now();
+  const std::filesystem::path spill = request.output_dir / ".rowloc-tiles";
+  std::filesystem::remove_all(spill, ec);
+  TiledCloud tiled(request.config.tiles.size_m, request.config.tiles.overlap_m, spill);
+  constexpr std::size_t kChunkPoints = std::size_t{1} << 18;
+  std::size_t announced = 0;
+  ForEachPointChunk(request.survey_path, kChunkPoints, [&](const std::vector<Eigen::Vector3d>& chunk) {
+    tiled.Add(chunk);
+    announced += chunk.size();
+    if (request.progress) request.progress("read", announced, 0);
+  });
+  const double read_seconds = SecondsSince(start);
+  MapBuildResult result = BuildRowMap(tiled, request.config, request.georeference,
+                                      request.octomap_resolution_m.has_value(), request.progress);
+  result.stages.insert(result.stages.begin(),
+                       StageReport{"read and tile", tiled.point_count(),
+                                   fmt::format("points, {} stored with overlaps", tiled.stored_count()), read_seconds});
+
+  start = Clock::now();
   const std::filesystem::path map_path = request.output_dir / "row-map.geojson";
   if (result.map) {
     mapio::WriteRowMapGeoJson(*result.map, map_path);
@@ -378,8 +392,8 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   std::error_code size_error;
   const auto cloud_bytes = std::filesystem::file_size(request.survey_path, size_error);
   const std::uintmax_t map_bytes = result.map ? std::filesystem::file_size(map_path) : 0;
-  double total_seconds = 0.0;
-  for (const auto& s : result.stages) total_seconds += s.seconds;
+  result.wall_seconds = SecondsSince(wall_start);
+  const double total_seconds = result.wall_seconds;
   nlohmann::ordered_json report;
   report["survey"] = request.survey_path.string();
   report["georeference"] = request.georeference.Describe();
@@ -392,6 +406,9 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   report["map_bytes"] = map_bytes;
   report["data_reduction"] = map_bytes > 0 && !size_error ? static_cast<double>(cloud_bytes) / map_bytes : 0.0;
   report["total_seconds"] = total_seconds;
+  report["tiles"] = {{"size_m", request.config.tiles.size_m}, {"overlap_m", request.config.tiles.overlap_m},
+                     {"count", result.tiles}, {"threads", result.tile_threads},
+                     {"largest_tile_points", result.largest_tile_points}};
   nlohmann::ordered_json stages = nlohmann::ordered_json::array();
   for (const auto& s : result.stages) {
     stages.push_back({{"stage", s.name}, {"count", s.points}, {"unit", s.unit}, {"seconds", s.seconds}});
@@ -414,7 +431,10 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   for (const auto& s : result.stages) {
     text += fmt::format("  {:<44} {:>7}  {:<36} {:8.3f}\n", s.name, s.points, s.unit, s.seconds);
   }
-  text += fmt::format("  {:<44} {:>7}  {:<36} {:8.3f}\n\n", "total", "", "", total_seconds);
+  text += fmt::format("  {:<44} {:>7}  {:<36} {:8.3f}\n\n", "total (wall clock)", "", "", total_seconds);
+  text += fmt::format("  tiles: {} of {} m with {} m overlap, {} threads, largest {} points\n\n", result.tiles,
+                      request.config.tiles.size_m, request.config.tiles.overlap_m, result.tile_threads,
+                      result.largest_tile_points);
   if (!result.parts.empty()) {
     text += "  part                 points  length [m]  traced  vertices  simplified\n";
     for (const auto& p : result.parts) {

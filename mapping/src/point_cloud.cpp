@@ -20,6 +20,7 @@
 #include <fstream>
 #include <new>
 #include <optional>
+#include <stdexcept>
 #include <string_view>
 #include <utility>
 
@@ -223,6 +224,26 @@ PointCloud ReadPointCloud(const std::filesystem::path& path) {
   if (cloud.points_m.empty()) throw PointCloudError(path, kNoPoints);
   RejectNonFinite(cloud.points_m, path);
   return cloud;
+}
+
+std::size_t ForEachPointChunk(const std::filesystem::path& path, std::size_t chunk_points,
+                              const std::function<void(const std::vector<Eigen::Vector3d>&)>& visit) {
+  if (chunk_points == 0) throw std::invalid_argument("ForEachPointChunk: chunk_points must be positive");
+  if (IsLasPath(path)) {
+    return static_cast<std::size_t>(ForEachLasFileChunk(path, chunk_points, [&visit](const LasCloud& chunk) {
+      // Finite by construction (the header's scale and offset are checked for overflow).
+      visit(chunk.points_m);
+    }));
+  }
+  PointCloud cloud = ReadPointCloud(path);
+  std::vector<Eigen::Vector3d> chunk;
+  for (std::size_t first = 0; first < cloud.points_m.size(); first += chunk_points) {
+    const auto begin = cloud.points_m.begin() + static_cast<std::ptrdiff_t>(first);
+    const auto end = cloud.points_m.begin() + static_cast<std::ptrdiff_t>(std::min(cloud.points_m.size(), first + chunk_points));
+    chunk.assign(begin, end);
+    visit(chunk);
+  }
+  return cloud.points_m.size();
 }
 
 void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path) {

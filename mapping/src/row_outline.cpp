@@ -45,6 +45,16 @@ bool FillGaps(std::vector<double>& v) {
   return true;
 }
 
+/// A running median of three (the ends keep their values): removes an edge estimate that one
+/// stray point made in a station bin of few points, keeps steps and corners of two bins or more.
+std::vector<double> MedianOfThree(const std::vector<double>& v) {
+  std::vector<double> out = v;
+  for (std::size_t i = 1; i + 1 < v.size(); ++i) {
+    out[i] = std::max(std::min(v[i - 1], v[i]), std::min(std::max(v[i - 1], v[i]), v[i + 1]));
+  }
+  return out;
+}
+
 /// A polyline with arc length: projection of points and evaluation of position and normal.
 class CentreLine {
  public:
@@ -265,6 +275,8 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
     if (!right[k].empty()) right_edge[k] = Quantile(right[k], params.edge_quantile);
   }
   if (!FillGaps(left_edge) || !FillGaps(right_edge)) return outline;
+  left_edge = MedianOfThree(left_edge);
+  right_edge = MedianOfThree(right_edge);
   std::vector<double> widths(stations);
   for (std::size_t k = 0; k < stations; ++k) widths[k] = left_edge[k] + right_edge[k];
   outline.median_width_m = Quantile(widths, 0.5);

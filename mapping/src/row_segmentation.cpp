@@ -109,17 +109,19 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
+  // Cells are kept sparse (a hash map of the occupied ones), so memory follows the band's points,
+  // not the survey's bounding box.
   const double fx = std::floor((hi.x() - lo.x()) / g) + 1.0;
   const double fy = std::floor((hi.y() - lo.y()) / g) + 1.0;
-  if (fx * fy > 4e8) {
+  if (fx * fy > 1e18) {
     throw std::invalid_argument("DetectRows: the raster would have " + std::to_string(fx * fy) +
-                                " cells (more than 4*10^8); use a larger rows.raster_cell_m");
+                                " cells (more than 10^18); use a larger rows.raster_cell_m");
   }
   const auto nx = static_cast<std::int64_t>(fx);
   const auto ny = static_cast<std::int64_t>(fy);
-  constexpr std::int32_t kEmpty = -1;
-  constexpr std::int32_t kUnlabelled = -2;
-  std::vector<std::int32_t> label(static_cast<std::size_t>(nx * ny), kEmpty);
+  constexpr std::int32_t kUnlabelled = -1;
+  std::unordered_map<std::int64_t, std::int32_t> label;
+  label.reserve(band_points_m.size() / 4 + 16);
   std::vector<std::int64_t> point_cell(band_points_m.size());
   std::vector<std::int64_t> occupied;
   for (std::size_t k = 0; k < band_points_m.size(); ++k) {
@@ -127,10 +129,7 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
     const auto j = std::min<std::int64_t>(ny - 1, static_cast<std::int64_t>((band_points_m[k].y() - lo.y()) / g));
     const std::int64_t c = j * nx + i;
     point_cell[k] = c;
-    if (label[static_cast<std::size_t>(c)] == kEmpty) {
-      label[static_cast<std::size_t>(c)] = kUnlabelled;
-      occupied.push_back(c);
-    }
+    if (label.emplace(c, kUnlabelled).second) occupied.push_back(c);
   }
   std::sort(occupied.begin(), occupied.end());
   result.raster_cells = occupied.size();
@@ -148,8 +147,9 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
   std::int32_t parts = 0;
   std::vector<std::int64_t> stack;
   for (const std::int64_t seed : occupied) {
-    if (label[static_cast<std::size_t>(seed)] != kUnlabelled) continue;
-    label[static_cast<std::size_t>(seed)] = parts;
+    std::int32_t& seed_label = label[seed];
+    if (seed_label != kUnlabelled) continue;
+    seed_label = parts;
     stack.push_back(seed);
     while (!stack.empty()) {
       const std::int64_t c = stack.back();
@@ -160,10 +160,10 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
         const std::int64_t ii = i + di;
         const std::int64_t jj = j + dj;
         if (ii < 0 || jj < 0 || ii >= nx || jj >= ny) continue;
-        const std::int64_t n = jj * nx + ii;
-        if (label[static_cast<std::size_t>(n)] == kUnlabelled) {
-          label[static_cast<std::size_t>(n)] = parts;
-          stack.push_back(n);
+        const auto found = label.find(jj * nx + ii);
+        if (found != label.end() && found->second == kUnlabelled) {
+          found->second = parts;
+          stack.push_back(found->first);
         }
       }
     }
@@ -172,7 +172,7 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
   result.parts_found = static_cast<std::size_t>(parts);
   std::vector<RowPart> all(static_cast<std::size_t>(parts));
   for (std::size_t k = 0; k < band_points_m.size(); ++k) {
-    all[static_cast<std::size_t>(label[static_cast<std::size_t>(point_cell[k])])].points_m.push_back(band_points_m[k]);
+    all[static_cast<std::size_t>(label.at(point_cell[k]))].points_m.push_back(band_points_m[k]);
   }
   std::vector<RowPart> kept;
   for (RowPart& part : all) {

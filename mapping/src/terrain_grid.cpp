@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <optional>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -80,7 +81,7 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
   if (cloud.points_m.empty()) throw std::invalid_argument("BuildTerrainGrid: empty cloud");
   if (!(params.cell_size_m >= 0.05 && params.cell_size_m <= 20.0) ||
       !(params.classification_radius_m > 0.0) || !(params.ground_tolerance_m > 0.0) ||
-      !(params.ground_thickness_m >= 0.0) || params.smoothing_passes < 0) {
+      !(params.ground_thickness_m >= 0.0) || params.smoothing_passes < 0 || params.min_ground_points < 1) {
     throw std::invalid_argument("BuildTerrainGrid: parameter outside its domain");
   }
   const double cell = params.cell_size_m;
@@ -90,6 +91,7 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     lo = lo.cwiseMin(p.head<2>());
     hi = hi.cwiseMax(p.head<2>());
   }
+  lo = (lo / cell).array().floor() * cell;  // the lattice of multiples of the cell
   const double fx = std::floor((hi.x() - lo.x()) / cell) + 1.0;
   const double fy = std::floor((hi.y() - lo.y()) / cell) + 1.0;
   if (fx * fy > 1e8) {
@@ -105,13 +107,37 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     return static_cast<std::size_t>(j) * nx + i;
   };
 
-  // 1. Lowest point per cell.
+  // 1. Lowest level per cell: the lowest z with at least min_ground_points points within
+  //    ground_thickness_m above it (so an isolated point below the ground, which the outlier
+  //    removal keeps when it lies near the ground's points, is skipped), and the median of those
+  //    points (the cell's ground height if it is ground).
   const double inf = std::numeric_limits<double>::infinity();
+  std::vector<std::pair<std::uint32_t, double>> cell_z;
+  cell_z.reserve(cloud.points_m.size());
+  for (const auto& p : cloud.points_m) cell_z.emplace_back(static_cast<std::uint32_t>(cell_of(p)), p.z());
+  std::sort(cell_z.begin(), cell_z.end());
   std::vector<double> z_min(cells, inf);
-  for (const auto& p : cloud.points_m) {
-    double& z = z_min[cell_of(p)];
-    z = std::min(z, p.z());
+  std::vector<double> level(cells, inf);
+  // A cloud too sparse for the support everywhere (a few points in a corner tile) falls back to the
+  // lowest point of each cell.
+  for (const int wanted : {params.min_ground_points, 1}) {
+    const auto support = static_cast<std::size_t>(std::max(wanted, 1));
+    for (std::size_t begin = 0; begin < cell_z.size();) {
+      std::size_t end = begin;
+      while (end < cell_z.size() && cell_z[end].first == cell_z[begin].first) ++end;
+      for (std::size_t i = begin; i + support <= end; ++i) {
+        if (cell_z[i + support - 1].second - cell_z[i].second > params.ground_thickness_m) continue;
+        std::size_t top = i + support;
+        while (top < end && cell_z[top].second - cell_z[i].second <= params.ground_thickness_m) ++top;
+        z_min[cell_z[i].first] = cell_z[i].second;
+        level[cell_z[i].first] = cell_z[i + (top - i) / 2].second;
+        break;
+      }
+      begin = end;
+    }
+    if (std::any_of(z_min.begin(), z_min.end(), [inf](double z) { return z != inf; })) break;
   }
+  std::vector<std::pair<std::uint32_t, double>>().swap(cell_z);
 
   // 2. Robust local lower-envelope plane per occupied cell.
   const int r = std::max(1, static_cast<int>(std::ceil(params.classification_radius_m / cell)));
@@ -160,22 +186,14 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     }
   }
 
-  // 3. Ground height per ground cell: median of the points within ground_thickness of z_min.
-  std::vector<std::vector<double>> low_points(cells);
-  for (const auto& p : cloud.points_m) {
-    const std::size_t c = cell_of(p);
-    if (ground[c] && p.z() <= z_min[c] + params.ground_thickness_m) low_points[c].push_back(p.z());
-  }
+  // 3. Ground height per ground cell: the median found in step 1.
   std::vector<double> height(cells, 0.0);
   std::vector<bool> filled(cells, false);
   for (std::size_t c = 0; c < cells; ++c) {
     if (!ground[c]) continue;
-    auto& v = low_points[c];
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-    height[c] = v[v.size() / 2];
+    height[c] = level[c];
     filled[c] = true;
   }
-  std::vector<std::vector<double>>().swap(low_points);
 
   // 4. Fill outward from the ground cells, then smooth.
   if (std::none_of(filled.begin(), filled.end(), [](bool f) { return f; })) {
@@ -184,26 +202,7 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     std::fill(height.begin(), height.end(), lowest);
     std::fill(filled.begin(), filled.end(), true);
   }
-  bool missing = true;
-  while (missing) {
-    missing = false;
-    std::vector<double> next = height;
-    std::vector<bool> next_filled = filled;
-    for (int j = 0; j < ny; ++j) {
-      for (int i = 0; i < nx; ++i) {
-        const std::size_t c = static_cast<std::size_t>(j) * nx + i;
-        if (filled[c]) continue;
-        if (const std::optional<double> mean = NeighbourMean(height, nx, ny, i, j, &filled)) {
-          next[c] = *mean;
-          next_filled[c] = true;
-        } else {
-          missing = true;
-        }
-      }
-    }
-    height = std::move(next);
-    filled = std::move(next_filled);
-  }
+  FillFromNeighbours(height, filled, nx, ny);
   for (int pass = 0; pass < params.smoothing_passes; ++pass) {
     std::vector<double> next(cells, 0.0);
     for (int j = 0; j < ny; ++j) {
@@ -214,6 +213,36 @@ TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& param
     height = std::move(next);
   }
   return TerrainGrid(lo, cell, nx, ny, std::move(height), std::move(ground));
+}
+
+void FillFromNeighbours(std::vector<double>& heights_m, std::vector<bool>& filled, int nx, int ny) {
+  const std::size_t cells = static_cast<std::size_t>(std::max(nx, 0)) * static_cast<std::size_t>(std::max(ny, 0));
+  if (nx <= 0 || ny <= 0 || heights_m.size() != cells || filled.size() != cells) {
+    throw std::invalid_argument("FillFromNeighbours: sizes do not match nx * ny");
+  }
+  if (std::none_of(filled.begin(), filled.end(), [](bool f) { return f; })) {
+    throw std::invalid_argument("FillFromNeighbours: no cell is filled");
+  }
+  bool missing = true;
+  while (missing) {
+    missing = false;
+    std::vector<double> next = heights_m;
+    std::vector<bool> next_filled = filled;
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t c = static_cast<std::size_t>(j) * nx + i;
+        if (filled[c]) continue;
+        if (const std::optional<double> mean = NeighbourMean(heights_m, nx, ny, i, j, &filled)) {
+          next[c] = *mean;
+          next_filled[c] = true;
+        } else {
+          missing = true;
+        }
+      }
+    }
+    heights_m = std::move(next);
+    filled = std::move(next_filled);
+  }
 }
 
 std::vector<double> HeightsAboveTerrain(const PointCloud& cloud, const TerrainGrid& terrain) {

@@ -16,6 +16,8 @@ namespace {
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 /// Seed of the noise/dropout stream: seed XOR this constant (see the header).
 constexpr std::uint64_t kNoiseStreamXor = 0x5DEECE66DA3B2C1FULL;
+/// Seed of the outlier stream: seed XOR this constant (see the header).
+constexpr std::uint64_t kOutlierStreamXor = 0x2545F4914F6CDD1DULL;
 /// Half-width of the central differences that give surface tangents (metres of station).
 constexpr double kDerivativeStep_m = 1e-5;
 /// Lateral deviation tolerated between the chords and the true curves when measuring arc length.
@@ -86,7 +88,7 @@ class Sampler {
   void Row(int row) {
     for (const Run& run : CanopyRuns(world_, row)) {
       Face(row, run, SurveySurface::kLeftFace);
-      Face(row, run, SurveySurface::kRightFace);
+      if (!params_.one_sided) Face(row, run, SurveySurface::kRightFace);
       Top(row, run);
       EndCap(row, run.start_m, -1.0);
       EndCap(row, run.end_m, +1.0);
@@ -115,6 +117,20 @@ class Sampler {
       });
     }
   }
+
+  /// The outliers (see the header), once the rows and the terrain are emitted.
+  void Outliers() {
+    if (params_.outlier_fraction <= 0.0 || kept_ == 0) return;
+    const auto count = static_cast<std::size_t>(std::llround(params_.outlier_fraction * static_cast<double>(kept_)));
+    const Eigen::Vector3d lo = lo_.array() - 1.0;
+    const Eigen::Vector3d span = (hi_ - lo_).array() + 2.0;
+    std::mt19937_64 outliers(params_.seed ^ kOutlierStreamXor);
+    for (std::size_t k = 0; k < count; ++k) {
+      const Eigen::Vector3d u(Uniform01(outliers), Uniform01(outliers), Uniform01(outliers));
+      visit_(SurveySample{lo + span.cwiseProduct(u), Eigen::Vector3d::UnitZ(), 0.0, SurveySurface::kOutlier, -1, 0.0});
+    }
+  }
+
 
  private:
   /// A station step <= cell / 4 whose chords stay within kChordTolerance_m of curves with
@@ -237,7 +253,11 @@ class Sampler {
     const double keep = Uniform01(noise_);
     const double noise_m = params_.noise_sigma_m * StandardNormal(noise_);
     if (keep < params_.dropout_fraction) return;
-    visit_(SurveySample{point_m + noise_m * normal, normal, noise_m, surface, row, s});
+    const Eigen::Vector3d p = point_m + noise_m * normal;
+    lo_ = kept_ == 0 ? p : Eigen::Vector3d(lo_.cwiseMin(p));
+    hi_ = kept_ == 0 ? p : Eigen::Vector3d(hi_.cwiseMax(p));
+    ++kept_;
+    visit_(SurveySample{p, normal, noise_m, surface, row, s});
   }
 
   const RowWorld& world_;
@@ -247,6 +267,9 @@ class Sampler {
   std::mt19937_64 noise_;
   double fine_step_m_;
   double terrain_fine_step_m_;
+  std::size_t kept_ = 0;
+  Eigen::Vector3d lo_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d hi_ = Eigen::Vector3d::Zero();
 };
 
 void Validate(const SurveyParams& params) {
@@ -260,7 +283,8 @@ std::optional<std::string> SurveyParamsProblem(const SurveyParams& p) {
        {RangeProblem("spacing_m", p.spacing_m, 1e-3, 10.0, false, " m"),
         RangeProblem("noise_sigma_m", p.noise_sigma_m, 0.0, 1.0, false, " m"),
         RangeProblem("dropout_fraction", p.dropout_fraction, 0.0, 1.0, true, ""),
-        RangeProblem("terrain_spacing_m", p.terrain_spacing_m, 1e-3, 100.0, false, " m")})
+        RangeProblem("terrain_spacing_m", p.terrain_spacing_m, 1e-3, 100.0, false, " m"),
+        RangeProblem("outlier_fraction", p.outlier_fraction, 0.0, 0.5, false, "")})
     if (!problem.empty()) return problem;
   return std::nullopt;
 }
@@ -289,7 +313,7 @@ double SurveyPointBound(const RowWorld& world, const SurveyParams& params) {
     const double strips = p.row_count * p.row_spacing_m / ht + 1.0;
     bound += strips * (p.row_length_m * (1.0 + kappa * reach_m) / ht + 1.0);
   }
-  return bound;
+  return bound * (1.0 + params.outlier_fraction);
 }
 
 void SampleSurvey(const RowWorld& world, const SurveyParams& params,
@@ -304,6 +328,7 @@ void SampleSurvey(const RowWorld& world, const SurveyParams& params,
   Sampler sampler(world, params, visit);
   for (int row = 0; row < world.params().row_count; ++row) sampler.Row(row);
   if (params.include_terrain) sampler.Terrain();
+  sampler.Outliers();
 }
 
 std::vector<Eigen::Vector3d> SampleCanopySurface(const RowWorld& world, const SurveyParams& params) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace rowloc::mapping {
@@ -19,8 +20,8 @@ PointCloud Grid(double step, int n, const Eigen::Vector3d& offset) {
 }
 
 TEST(CloudCleaningTest, VoxelDownsamplingKeepsOneCentroidPerVoxel) {
-  // 20 x 20 voxels of 2 cm with 4 points each, 5 mm away from the voxel faces (voxels are counted
-  // from the lowest point, the anchor at (-1, -1), which is alone in its voxel).
+  // 20 x 20 voxels of 2 cm with 4 points each, 5 mm away from the voxel faces (voxels lie on the
+  // lattice of multiples of 2 cm; a lone point at (-1, -1) has a voxel of its own).
   PointCloud cloud;
   cloud.points_m.emplace_back(-1.0, -1.0, 0.0);
   for (int a = 0; a < 20; ++a) {
@@ -89,6 +90,64 @@ TEST(CloudCleaningTest, ATooFineGridIsRefused) {
   PointCloud cloud;
   cloud.points_m = {Eigen::Vector3d::Zero(), Eigen::Vector3d(1e5, 0.0, 0.0)};
   EXPECT_THROW(CleanCloud(cloud, CleanParams{0.001, 0, 3.0}), std::invalid_argument);
+}
+
+TEST(CloudCleaningTest, VoxelsLieOnALatticeSoThatTilesAgree) {
+  // A cloud and the same cloud with a far point at an odd position: the voxels of the common
+  // points, and so their centroids, are the same (tiles of one survey see the same voxels).
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 0.5);
+  PointCloud a;
+  for (int k = 0; k < 3000; ++k) a.points_m.emplace_back(u(rng), u(rng), u(rng));
+  PointCloud b = a;
+  b.points_m.emplace_back(-0.0137, -0.0291, -0.0333);
+  const CleanResult ra = CleanCloud(a, CleanParams{0.02, 0, 3.0});
+  const CleanResult rb = CleanCloud(b, CleanParams{0.02, 0, 3.0});
+  ASSERT_EQ(rb.cloud.points_m.size(), ra.cloud.points_m.size() + 1);
+  for (const auto& p : ra.cloud.points_m) {
+    const bool found = std::any_of(rb.cloud.points_m.begin(), rb.cloud.points_m.end(),
+                                   [&p](const Eigen::Vector3d& q) { return (p - q).norm() < 1e-12; });
+    EXPECT_TRUE(found) << p.transpose();
+  }
+}
+
+TEST(CloudCleaningTest, OutlierRemovalMatchesTheBruteForceStatisticOnAnyThreadCount) {
+  // Rusu et al. (2008): d_i = mean distance to the k nearest neighbours; outliers have
+  // d_i > mean(d) + f stddev(d) (sample standard deviation). Brute force over 600 points.
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> n(0.0, 0.2);
+  PointCloud cloud;
+  for (int k = 0; k < 580; ++k) cloud.points_m.emplace_back(n(rng), n(rng), 0.1 * n(rng));
+  std::uniform_real_distribution<double> far(-3.0, 3.0);
+  for (int k = 0; k < 20; ++k) cloud.points_m.emplace_back(far(rng), far(rng), far(rng));
+  const int k_nn = 8;
+  const double factor = 1.5;
+  std::vector<double> d;
+  for (const auto& p : cloud.points_m) {
+    std::vector<double> all;
+    for (const auto& q : cloud.points_m) all.push_back((p - q).norm());
+    std::sort(all.begin(), all.end());  // all[0] = 0: the point itself
+    double sum = 0.0;
+    for (int j = 1; j <= k_nn; ++j) sum += all[static_cast<std::size_t>(j)];
+    d.push_back(sum / k_nn);
+  }
+  double mean = 0.0;
+  for (double v : d) mean += v / static_cast<double>(d.size());
+  double var = 0.0;
+  for (double v : d) var += (v - mean) * (v - mean) / static_cast<double>(d.size() - 1);
+  const double threshold = mean + factor * std::sqrt(var);
+  std::vector<Eigen::Vector3d> expected;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    // Points within float rounding of the threshold could go either way; there are none here.
+    ASSERT_GT(std::abs(d[i] - threshold), 1e-5);
+    if (d[i] <= threshold) expected.push_back(cloud.points_m[i]);
+  }
+  ASSERT_LT(expected.size(), cloud.points_m.size());  // the test removes something
+  for (int threads : {1, 2, 5}) {
+    const CleanResult result = CleanCloud(cloud, CleanParams{0.0, k_nn, factor}, threads);
+    EXPECT_EQ(result.cloud.points_m, expected) << threads << " threads";
+    EXPECT_EQ(result.outliers_removed, cloud.points_m.size() - expected.size());
+  }
 }
 
 }  // namespace

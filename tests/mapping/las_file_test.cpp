@@ -287,6 +287,57 @@ TEST(ReadPointCloud, RefusesLasEdgeCasesWithItsOwnMessages) {
 
 // ---- Refusals ----
 
+TEST(ForEachPointChunk, StreamsALasFileInChunksEqualToTheWholeRead) {
+  test::ScratchDir dir;
+  const LasCloud cloud = GridCloud(10007, Eigen::Vector3d(512000.0, 5012000.0, 200.0), 11);
+  const std::filesystem::path path = dir / "survey.las";
+  WriteLasFile(cloud, path);
+  const PointCloud whole = ReadPointCloud(path);
+  for (std::size_t chunk : {std::size_t{1}, std::size_t{1000}, std::size_t{10007}, std::size_t{1} << 20}) {
+    std::vector<Eigen::Vector3d> joined;
+    std::size_t largest = 0;
+    const std::size_t count = ForEachPointChunk(path, chunk, [&](const std::vector<Eigen::Vector3d>& points) {
+      largest = std::max(largest, points.size());
+      joined.insert(joined.end(), points.begin(), points.end());
+    });
+    EXPECT_EQ(count, 10007U);
+    EXPECT_LE(largest, chunk);
+    EXPECT_EQ(joined, whole.points_m) << "chunks of " << chunk;
+  }
+  EXPECT_THROW(ForEachPointChunk(path, 0, [](const std::vector<Eigen::Vector3d>&) {}), std::invalid_argument);
+}
+
+TEST(ForEachPointChunk, ReportsATruncatedLasFileAfterTheChunksBeforeIt) {
+  test::ScratchDir dir;
+  std::string bytes = ValidFile(2, 0, 100);
+  bytes.resize(bytes.size() - 30);  // cuts into record 99 of 100 (20 bytes each)
+  const std::filesystem::path path = dir / "cut.las";
+  WriteBytes(path, bytes);
+  // ReadLasHeader checks the count against the file's size first: nothing is streamed.
+  std::size_t seen = 0;
+  try {
+    ForEachPointChunk(path, 10, [&](const std::vector<Eigen::Vector3d>& chunk) { seen += chunk.size(); });
+    ADD_FAILURE() << "a truncated file was streamed";
+  } catch (const PointCloudError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_THAT(e.what(), HasSubstr("point count"));
+  }
+  EXPECT_EQ(seen, 0U);
+}
+
+TEST(ForEachPointChunk, RefusesAnEmptyLasFile) {
+  test::ScratchDir dir;
+  const std::filesystem::path path = dir / "empty.las";
+  WriteBytes(path, ValidFile(2, 0, 0));
+  try {
+    ForEachPointChunk(path, 10, [](const std::vector<Eigen::Vector3d>&) {});
+    ADD_FAILURE() << "an empty file was accepted";
+  } catch (const PointCloudError& e) {
+    EXPECT_EQ(e.path(), path);
+    EXPECT_THAT(e.what(), HasSubstr("the file holds no points"));
+  }
+}
+
 TEST(ReadLas, RefusesLazByExtensionWithTheConversion) {
   test::ScratchDir dir;
   const std::filesystem::path path = dir / "survey.laz";

@@ -52,6 +52,19 @@ TEST(MapBuildConfigTest, ValidateNamesTheKeyOutsideItsDomain) {
   EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("outline.edge_quantile"));
 }
 
+TEST(MapBuildConfigTest, TheTileOverlapMustCoverTheGroundFitsNeighbourhood) {
+  MapBuildConfig config;
+  config.tiles.overlap_m = 1.5;
+  config.terrain.classification_radius_m = 2.0;
+  const auto problem = ValidateMapBuildConfig(config);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_THAT(*problem, HasSubstr("tiles.overlap_m: must be at least terrain.classification_radius_m (2), got 1.5"));
+  config.tiles.overlap_m = 2.0;
+  EXPECT_FALSE(ValidateMapBuildConfig(config).has_value());
+  config.tiles.threads = 65;
+  EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("tiles.threads: must be in [0, 64]"));
+}
+
 TEST_F(MapBuildConfigFileTest, FormatThenLoadRoundTrips) {
   MapBuildConfig config;
   config.band.reference_height_m = 1.25;
@@ -79,11 +92,18 @@ TEST_F(MapBuildConfigFileTest, OutOfRangeAndWrongTypeAreErrors) {
               HasSubstr("clean.voxel_size_m: must be in [0, 1], got -1"));
   EXPECT_THAT(Load(Write(std::string(text).replace(at, 20, "\"voxel_size_m\": \"x\""))),
               HasSubstr("clean.voxel_size_m: must be a number"));
-  EXPECT_THAT(Load(Write("{\"clean\": {}}")), HasSubstr("terrain: missing key"));
+  EXPECT_THAT(Load(Write("{\"clean\": {}}")), HasSubstr("tiles: missing key"));
   std::string no_voxel = text;
   no_voxel.replace(at, 21, "");
   EXPECT_THAT(Load(Write(no_voxel)), HasSubstr("clean.voxel_size_m: missing key"));
   EXPECT_THAT(Load(Write("{ not json")), HasSubstr("invalid JSON"));
+  // Each key in its domain, but the two together not: the file and both keys are named.
+  std::string thin_overlap = text;
+  const auto overlap = thin_overlap.find("\"overlap_m\": 3");
+  ASSERT_NE(overlap, std::string::npos);
+  thin_overlap.replace(overlap, 14, "\"overlap_m\": 1");
+  const std::string error = Load(Write(thin_overlap));
+  EXPECT_THAT(error, HasSubstr("tiles.overlap_m: must be at least terrain.classification_radius_m"));
   EXPECT_THAT(Load(dir_ / "nonexistent.json"), HasSubstr("nonexistent.json: cannot open"));
 }
 

@@ -65,8 +65,9 @@ TEST(MapBuilderTest, RowsOverASlopedFieldMatchTheTruth) {
   EXPECT_LT(c.p95_m, 0.01);
   EXPECT_LT(c.max_m, 0.03);
   // Every stage is reported.
-  ASSERT_GE(result.stages.size(), 7U);
-  EXPECT_EQ(result.stages.front().name, "clean: voxel downsampling");
+  ASSERT_GE(result.stages.size(), 8U);
+  EXPECT_EQ(result.stages.front().name, "tiles: steps 1-3");
+  EXPECT_EQ(result.stages[1].name, "clean: voxel downsampling");
 }
 
 TEST(MapBuilderTest, UtmCloudGivesTheSameMapAsTheLocalOne) {
@@ -160,7 +161,7 @@ TEST(MapBuilderTest, RunMapBuildWritesEveryOutput) {
   EXPECT_THAT(svg.str(), HasSubstr("<svg"));
   EXPECT_THAT(svg.str(), HasSubstr("<polygon"));
   EXPECT_THAT(svg.str(), HasSubstr("</svg>"));
-  EXPECT_EQ(result.stages.front().name, "read");
+  EXPECT_EQ(result.stages.front().name, "read and tile");
   EXPECT_EQ(result.stages.back().name, "write");
   EXPECT_FALSE(std::filesystem::exists(dir / "out/canopy.bt"));
 }

@@ -93,6 +93,19 @@ TEST(RowSegmentationTest, ClutterIsDroppedAndNothingIsNoRows) {
   EXPECT_THROW(DetectRows(band, bad), std::invalid_argument);
 }
 
+TEST(RowSegmentationTest, RowsFarApartCostTheirCellsNotTheirBoundingBox) {
+  // Two short rows 30 km apart: a dense 5 cm raster of their bounding box would have 3.6 * 10^11
+  // cells; the sparse one holds only the occupied cells.
+  test::SyntheticField field = Field({{0, 6, 0.0, 0.25}});
+  std::vector<Eigen::Vector2d> band = Band(field);
+  const std::size_t one_row = band.size();
+  for (std::size_t k = 0; k < one_row; ++k) band.push_back(band[k] + Eigen::Vector2d(30000.0, 30000.0));
+  const RowDetection rows = DetectRows(band, RowParams{});
+  ASSERT_EQ(rows.rows.size(), 2U);
+  EXPECT_EQ(rows.rows[0].parts.front().points_m.size(), one_row);
+  EXPECT_EQ(rows.rows[1].parts.front().points_m.size(), one_row);
+}
+
 TEST(RowSegmentationTest, CurvedRowsWithAGapAreFollowed) {
   // Three concentric arcs (radius 30, 32.5, 35 m, a quarter turn each) sampled on both faces and
   // the end caps; the middle one has a 1.2 m gap. Chords would cross the neighbouring rows.

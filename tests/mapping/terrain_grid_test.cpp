@@ -40,10 +40,24 @@ TEST(TerrainGridTest, TiltedPlaneUnderRowsIsFollowed) {
     }
   }
   EXPECT_LT(worst, 0.03);
-  // Canopy bottoms (0.5 m up) are not ground: the cells under row 2's centre are filled.
-  const int i = static_cast<int>((6.0 - dtm.origin_m().x()) / dtm.cell_size_m());
-  const int j = static_cast<int>((2.5 - dtm.origin_m().y()) / dtm.cell_size_m());
-  EXPECT_FALSE(dtm.ground()[static_cast<std::size_t>(j * dtm.nx() + i)]);
+  // Canopy bottoms (0.5 m up) are not ground: on a 0.1 m grid, whose cells can lie wholly under
+  // the 0.3 m wide row, the cells under row 2's centre line are filled, their neighbours in the
+  // lane are ground.
+  TerrainParams fine;
+  fine.cell_size_m = 0.1;
+  fine.min_ground_points = 1;  // the field's ground is sampled every 0.1 m: one point per cell
+  const TerrainGrid fine_dtm = BuildTerrainGrid(cloud, fine);
+  const auto ground_at = [&fine_dtm](double x, double y) {
+    const int i = static_cast<int>((x - fine_dtm.origin_m().x()) / fine_dtm.cell_size_m());
+    const int j = static_cast<int>((y - fine_dtm.origin_m().y()) / fine_dtm.cell_size_m());
+    return fine_dtm.ground()[static_cast<std::size_t>(j * fine_dtm.nx() + i)];
+  };
+  EXPECT_FALSE(ground_at(6.05, 2.45));
+  EXPECT_FALSE(ground_at(6.05, 2.55));
+  EXPECT_TRUE(ground_at(6.05, 1.25));
+  // The grid lies on the lattice of multiples of its cell (tiles of one survey share cells).
+  EXPECT_DOUBLE_EQ(std::remainder(dtm.origin_m().x(), 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(std::remainder(dtm.origin_m().y(), 0.5), 0.0);
 }
 
 TEST(TerrainGridTest, UndulatingGroundIsFollowed) {

@@ -257,6 +257,50 @@ TEST(CanopySurfaceSampler, DropoutKeepsTheConfiguredFractionOfTheSamePoints) {
   EXPECT_EQ(j, kept.size());
 }
 
+TEST(CanopySurfaceSampler, OneSidedLeavesOutTheRightFacesOnly) {
+  const RowWorld world(ArcWorld());
+  SurveyParams params = NoiseFree(0.05);
+  const auto all = Samples(world, params);
+  params.one_sided = true;
+  const auto one_sided = Samples(world, params);
+  std::size_t right = 0;
+  for (const SurveySample& s : all) right += s.surface == SurveySurface::kRightFace ? 1 : 0;
+  ASSERT_GT(right, 100U);
+  // The other surfaces keep their counts up to the cells at the ends of runs (their positions come
+  // from the same random stream, which no longer draws for the right faces).
+  EXPECT_NEAR(static_cast<double>(one_sided.size()), static_cast<double>(all.size() - right), 0.001 * all.size());
+  for (const SurveySample& s : one_sided) EXPECT_NE(s.surface, SurveySurface::kRightFace);
+}
+
+TEST(CanopySurfaceSampler, OutliersAreTheFractionOfKeptPointsInTheGrownBoundingBox) {
+  const RowWorld world(ArcWorld());
+  SurveyParams params = NoiseFree(0.05);
+  params.include_terrain = true;
+  const auto clean = Samples(world, params);
+  params.outlier_fraction = 0.01;
+  const auto noisy = Samples(world, params);
+  ASSERT_EQ(noisy.size(), clean.size() + static_cast<std::size_t>(std::llround(0.01 * clean.size())));
+  Eigen::Vector3d lo = clean.front().position_m;
+  Eigen::Vector3d hi = lo;
+  for (const SurveySample& s : clean) {
+    lo = lo.cwiseMin(s.position_m);
+    hi = hi.cwiseMax(s.position_m);
+  }
+  std::size_t below_ground = 0;
+  for (std::size_t k = 0; k < noisy.size(); ++k) {
+    if (k < clean.size()) {
+      EXPECT_EQ(noisy[k].position_m, clean[k].position_m);  // the survey itself is unchanged
+      continue;
+    }
+    const SurveySample& s = noisy[k];
+    EXPECT_EQ(s.surface, SurveySurface::kOutlier);
+    EXPECT_EQ(s.row, -1);
+    EXPECT_TRUE((s.position_m.array() >= lo.array() - 1.0).all() && (s.position_m.array() <= hi.array() + 1.0).all());
+    below_ground += s.position_m.z() < world.terrain().HeightAt(s.position_m.head<2>()) ? 1 : 0;
+  }
+  EXPECT_GT(below_ground, 0U);  // the worst case for a terrain model is in the test
+}
+
 TEST(CanopySurfaceSampler, RejectsBadParametersNamingTheField) {
   const RowWorld world(BoxWorld());
   const auto expect_error = [&](SurveyParams params, const std::string& field) {
@@ -289,6 +333,11 @@ TEST(CanopySurfaceSampler, RejectsBadParametersNamingTheField) {
     SurveyParams p;
     p.terrain_spacing_m = v;
     expect_error(p, "terrain_spacing_m");
+  }
+  for (double v : {-0.01, 0.51, nan}) {
+    SurveyParams p;
+    p.outlier_fraction = v;
+    expect_error(p, "outlier_fraction");
   }
   EXPECT_FALSE(SurveyParamsProblem(SurveyParams{}).has_value());
 }

@@ -35,6 +35,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <istream>
 #include <optional>
 #include <string>
@@ -95,12 +96,24 @@ std::string LazRefusal(const std::filesystem::path& path);
 /// `name` is used in messages only. Throws PointCloudError.
 LasHeader ReadLasHeader(std::istream& in, const std::filesystem::path& name);
 
+/// Reads the point records of `in` (whose header `header` was read by ReadLasHeader) in chunks of
+/// at most `chunk_points` points, calling `visit` with each (its header is `header`); memory is one
+/// chunk, whatever the file's size. Throws PointCloudError on a truncated file (after the chunks
+/// before it were visited) and std::invalid_argument if chunk_points is 0.
+void ForEachLasChunk(std::istream& in, const LasHeader& header, const std::filesystem::path& name,
+                     std::size_t chunk_points, const std::function<void(const LasCloud&)>& visit);
+
 /// Reads a whole LAS file from `in` (at its start). Throws PointCloudError (a file of zero points
 /// is returned, not refused: ReadLasPointCloud refuses it).
 LasCloud ReadLas(std::istream& in, const std::filesystem::path& name);
 
 /// Reads a LAS file; .laz is refused by name before it is opened. Throws PointCloudError.
 LasCloud ReadLasFile(const std::filesystem::path& path);
+
+/// ReadLasFile in chunks (ForEachLasChunk): memory is one chunk. Returns the number of points.
+/// Throws PointCloudError as ReadLasFile, and for a file of zero points.
+std::uint64_t ForEachLasFileChunk(const std::filesystem::path& path, std::size_t chunk_points,
+                                  const std::function<void(const LasCloud&)>& visit);
 
 /// ReadPointCloud's LAS branch: ReadLasFile's points, refusing a missing or non-regular file, a file
 /// without points and non-finite points with the messages of ReadPointCloud.

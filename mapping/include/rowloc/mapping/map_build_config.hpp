@@ -14,6 +14,14 @@
 
 namespace rowloc::mapping {
 
+/// Tiling: steps 1-3 run per square tile of the survey (plus an overlap on every side), so that
+/// memory is bounded by a tile, not by the survey (docs/mapping.md, "Tiles and memory").
+struct TileParams {
+  double size_m = 40.0;     ///< edge of a tile's core; every point belongs to exactly one core
+  double overlap_m = 3.0;   ///< margin read around each core; >= terrain.classification_radius_m
+  int threads = 0;          ///< threads of the outlier removal (per tile); 0: one per hardware thread. Results do not depend on it
+};
+
 /// Step 1, clean: voxel downsampling and statistical outlier removal.
 struct CleanParams {
   double voxel_size_m = 0.02;        ///< voxel edge; one centroid per occupied voxel. 0: no downsampling
@@ -27,6 +35,7 @@ struct TerrainParams {
   double classification_radius_m = 2.0;  ///< neighbourhood of the robust local plane per cell
   double ground_tolerance_m = 0.15;  ///< a cell is ground if its lowest point is <= plane + this
   double ground_thickness_m = 0.05;  ///< ground height of a cell: median of points <= lowest + this
+  int min_ground_points = 3;         ///< a cell's lowest level needs this many points within ground_thickness_m
   int smoothing_passes = 1;          ///< 3x3 mean filter passes over the filled grid
 };
 
@@ -59,6 +68,7 @@ struct OutlineParams {
 };
 
 struct MapBuildConfig {
+  TileParams tiles;
   CleanParams clean;
   TerrainParams terrain;
   CanopyBandParams band;

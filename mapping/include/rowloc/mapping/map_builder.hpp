@@ -27,6 +27,8 @@
 #include "rowloc/mapping/map_build_config.hpp"
 #include "rowloc/mapping/point_cloud.hpp"
 #include "rowloc/mapping/terrain_grid.hpp"
+#include "rowloc/mapping/tile_processing.hpp"
+#include "rowloc/mapping/tiled_cloud.hpp"
 
 #include <Eigen/Core>
 
@@ -83,6 +85,10 @@ struct MapBuildResult {
   std::size_t parts_dropped = 0;
   std::size_t links = 0;
   std::size_t outlines_failed = 0;      ///< parts without a usable outline (skipped)
+  std::size_t tiles = 0;                ///< tiles processed (steps 1-3)
+  int tile_threads = 1;                 ///< threads of the outlier removal
+  std::size_t largest_tile_points = 0;  ///< points of the largest tile, overlap included
+  double wall_seconds = 0.0;            ///< RunMapBuild: the whole run, wall clock
   std::vector<Eigen::Vector2d> cloud_sample_m;  ///< cleaned cloud sample in the map frame (SVG)
   std::vector<double> cloud_sample_height_m;    ///< their heights above the terrain
   PointCloud canopy_m;  ///< with keep_canopy: the cleaned points above the ground, map frame
@@ -95,6 +101,11 @@ struct MapBuildResult {
 MapBuildResult BuildRowMap(const PointCloud& cloud, const MapBuildConfig& config,
                            const Georeference& georeference, bool keep_canopy = false);
 
+/// The same on a tiled cloud (in memory or spilled to disk); its tiles are released as they are
+/// processed. progress, if set, is called per batch of tiles ("tiles", done, total).
+MapBuildResult BuildRowMap(TiledCloud& cloud, const MapBuildConfig& config, const Georeference& georeference,
+                           bool keep_canopy = false, const ProgressCallback& progress = {});
+
 struct MapBuildRequest {
   std::filesystem::path survey_path;
   std::filesystem::path output_dir;
@@ -102,10 +113,14 @@ struct MapBuildRequest {
   MapBuildConfig config;
   std::string config_source = "built-in defaults";  ///< for the report
   std::optional<double> octomap_resolution_m;        ///< set: also write canopy.bt at this voxel size
+  ProgressCallback progress;  ///< optional: ("read", points, 0) per chunk read, ("tiles", done, total)
 };
 
-/// Reads the survey (PointCloudError on problems with it), builds the map and writes every output
-/// (creating output_dir). Returns the result; the report's read and write stages are included.
+/// Reads the survey in chunks into tiles spilled to output_dir/.rowloc-tiles (removed at the end),
+/// builds the map and writes every output (creating output_dir). Peak memory: the reader's (a
+/// chunk for LAS, the whole cloud for PLY/PCD, which PCL reads whole) or, after reading, `threads`
+/// tiles plus the merged products (tile_processing.hpp). Throws PointCloudError on problems with
+/// the survey. Returns the result; the report's read and write stages are included.
 MapBuildResult RunMapBuild(const MapBuildRequest& request);
 
 /// The SVG top view (plain SVG text): outlines over the cloud sample, coloured by height.

@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -49,6 +50,14 @@ class PointCloudError : public std::runtime_error {
 /// parse it, it has no x/y/z float fields, it holds no points, or any point has a non-finite
 /// coordinate (the message gives the count).
 PointCloud ReadPointCloud(const std::filesystem::path& path);
+
+/// Reads a point cloud as ReadPointCloud does, handing it to `visit` in chunks of at most
+/// `chunk_points` points, in file order. LAS files are streamed (memory: one chunk, whatever the
+/// file's size); PLY and PCD are read whole by PCL first (memory: the whole cloud), since PCL has
+/// no incremental reader. Returns the number of points. Throws as ReadPointCloud, and
+/// std::invalid_argument if chunk_points is 0.
+std::size_t ForEachPointChunk(const std::filesystem::path& path, std::size_t chunk_points,
+                              const std::function<void(const std::vector<Eigen::Vector3d>&)>& visit);
 
 /// Writes a point cloud as binary PLY or binary PCD (by extension, case-insensitive), with x, y, z
 /// as double, through mapio::OutputFile (a temporary renamed over the target on success; never over

@@ -2,7 +2,12 @@
 // slopes and undulations, with bilinear height lookup; step 3 (height above the terrain) uses it.
 //
 // Algorithm (BuildTerrainGrid):
-//  1. a grid of cell_size_m over the cloud's horizontal extent; per cell, its lowest point z_min;
+//  1. a grid of cell_size_m over the cloud's horizontal extent, on the lattice of multiples of
+//     cell_size_m (so that overlapping tiles of one survey share their cells); per cell, its lowest
+//     level z_min: the lowest z with at least min_ground_points points within ground_thickness_m
+//     above it, so that a stray point below the ground (multipath, an outlier close enough to the
+//     ground's points to survive the outlier removal) does not become the ground (the lowest point
+//     of each cell if no cell of the cloud has that support);
 //  2. per occupied cell, a robust local plane z = a + b dx + c dy fitted by least squares to the
 //     z_min of the occupied cells within classification_radius_m; cells more than
 //     ground_tolerance_m above the current plane are dropped and the fit repeated (5 times), so the
@@ -10,7 +15,7 @@
 //     z_min lies within ground_tolerance_m above that plane (canopy bottoms, 0.3 m or more above the
 //     ground, are not);
 //  3. a ground cell's height is the median of its points within ground_thickness_m of z_min (the
-//     lowest point alone is biased low by the noise);
+//     lowest level alone is biased low by the noise);
 //  4. cells without ground (under the canopy, outside the survey) are filled outward from ground
 //     cells, each pass giving an unfilled cell the mean of its filled 8-neighbours, then
 //     smoothing_passes 3x3 mean filters smooth the grid.
@@ -60,6 +65,11 @@ class TerrainGrid {
 /// Builds the DTM of a cloud (algorithm above). Throws std::invalid_argument if the cloud is empty,
 /// a parameter is outside its domain (map_build_config.hpp), or the grid would exceed 10^8 cells.
 TerrainGrid BuildTerrainGrid(const PointCloud& cloud, const TerrainParams& params);
+
+/// Step 4's fill on its own: every cell with filled[c] == false gets the mean of its filled
+/// 8-neighbours, pass after pass, until all are filled (row-major nx * ny). Throws
+/// std::invalid_argument if the sizes do not match or no cell is filled.
+void FillFromNeighbours(std::vector<double>& heights_m, std::vector<bool>& filled, int nx, int ny);
 
 /// Step 3: the height of every point above the terrain (z - HeightAt(x, y)), in the cloud's order.
 std::vector<double> HeightsAboveTerrain(const PointCloud& cloud, const TerrainGrid& terrain);

@@ -29,6 +29,11 @@
 // dropout from a second std::mt19937_64(seed ^ 0x5DEECE66DA3B2C1F) that draws one uniform and one
 // Box-Muller normal (two uniforms) per point whatever sigma and dropout are, so clouds of the same
 // seed differ only by their noise and dropout. Uniforms use the engine's raw output (portable).
+// Scan defects (map build robustness, docs/mapping.md): `one_sided` leaves out every right face
+// (a mobile scanner that saw each row from one side); `outlier_fraction` f adds, after the rows
+// and the terrain, round(f N) points (N = the points kept so far) uniform in the kept points'
+// bounding box grown by 1 m on every side (below the ground too: the worst case for a DTM), from
+// a third std::mt19937_64(seed ^ 0x2545F4914F6CDD1D); they are SurveySurface::kOutlier, row -1.
 #pragma once
 
 #include "rowloc/sim/row_world.hpp"
@@ -49,13 +54,15 @@ struct SurveyParams {
   double dropout_fraction = 0.0;     ///< probability that a point is dropped, in [0, 1)
   bool include_terrain = false;      ///< also sample the terrain not covered by canopy
   double terrain_spacing_m = 0.1;    ///< terrain cell size, in [0.001, 100] m
+  bool one_sided = false;           ///< leave out the right faces of every row
+  double outlier_fraction = 0.0;    ///< outliers added, as a fraction of the kept points, in [0, 0.5]
   std::uint64_t seed = 1;
 };
 
 /// The largest number of points a survey may produce (about 1.2 GB of positions).
 inline constexpr double kMaxSurveyPoints = 5e7;
 
-enum class SurveySurface { kLeftFace, kRightFace, kTop, kEndCap, kTerrain };
+enum class SurveySurface { kLeftFace, kRightFace, kTop, kEndCap, kTerrain, kOutlier };
 
 /// One survey point with what produced it (for tests and for labelled clouds).
 struct SurveySample {
