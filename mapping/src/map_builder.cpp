@@ -236,12 +236,19 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
         "found, {} dropped as clutter (rows.min_part_points {}, rows.min_part_length_m {})",
         band.size(), survey.points_cleaned, config.band.reference_height_m, config.band.band_half_width_m,
         detection.parts_found, detection.parts_dropped, config.rows.min_part_points, config.rows.min_part_length_m);
+    if (result.outlines_failed > 0) {
+      result.message += fmt::format(
+          "; {} parts narrower than outline.min_width_m ({} m): single canopy faces, as a scan from one side of "
+          "each row gives; a row's width cannot be measured from one face, so these rows are not mapped (survey "
+          "both sides of every row)",
+          result.outlines_failed, config.outline.min_width_m);
+    }
   } else {
     result.message = fmt::format("{} rows ({} parts, {} vertices)", result.rows, map.rows.size(), map_vertices);
     if (result.outlines_failed > 0) {
       result.message += fmt::format(
-          "; {} parts without an outline (narrower than outline.min_width_m: a lone canopy face? for a sparse "
-          "survey raise rows.link_radius_m)",
+          "; {} parts without an outline (narrower than outline.min_width_m: single canopy faces, from a scan of "
+          "one side of the rows, or from a survey sparser than rows.link_radius_m allows)",
           result.outlines_failed);
     }
     result.map = std::move(map);

@@ -247,14 +247,18 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
   const CentreLine centre(line);
   outline.centreline_m = line;
 
-  // 2. Station and offset of every point.
+  // 2. Station and offset of every point. The part spans from its third lowest to its third highest
+  //    station: up to two stray points beyond an end (an outlier the cleaning kept, within
+  //    rows.link_radius_m of the row) are left out instead of moving the end cap out to them.
   project_all(centre, se);
-  double s_lo = std::numeric_limits<double>::infinity();
-  double s_hi = -s_lo;
-  for (const auto& [s, e] : se) {
-    s_lo = std::min(s_lo, s);
-    s_hi = std::max(s_hi, s);
-  }
+  std::vector<double> stations_sorted;
+  stations_sorted.reserve(se.size());
+  for (const auto& [s, e] : se) stations_sorted.push_back(s);
+  std::sort(stations_sorted.begin(), stations_sorted.end());
+  const std::size_t strays = std::min<std::size_t>(2, (stations_sorted.size() - 1) / 2);
+  const double s_lo = stations_sorted[strays];
+  const double s_hi = stations_sorted[stations_sorted.size() - 1 - strays];
+  std::erase_if(se, [&](const std::pair<double, double>& p) { return p.first < s_lo || p.first > s_hi; });
 
   // 3. Edges per station bin.
   const auto stations = static_cast<std::size_t>(std::max(1.0, std::round((s_hi - s_lo) / params.station_step_m)));

@@ -70,3 +70,36 @@ set_tests_properties(apps.map_build_curved_world_map PROPERTIES FIXTURES_REQUIRE
                      FIXTURES_SETUP map_build_curved_map)
 set_tests_properties(apps.map_build_curved_world_meets_the_target PROPERTIES
                      FIXTURES_REQUIRED "map_build_curved_survey;map_build_curved_map")
+# Progress bars on request (on a terminal by default), one per stage; a bad --progress is refused.
+rowloc_cli_test(map_build_draws_progress_bars ON "clean +\\[#+\\] [0-9]+/[0-9]+.*terrain +\\[#+\\] [0-9]+/[0-9]+"
+                map build ${_build_out}/gappy/survey.pcd -o ${_build_out}/progress --origin 45.0703 7.6869 240.0
+                --progress always)
+set_tests_properties(apps.map_build_draws_progress_bars PROPERTIES FIXTURES_REQUIRED map_build_survey)
+rowloc_cli_test(map_build_rejects_bad_progress OFF "--progress"
+                map build nonexistent.pcd -o ${_build_out}/x --origin 45.0703 7.6869 240.0 --progress sometimes)
+# Scan defects (rowloc world --survey-*): 1 % outliers (below the ground too) and 30 % of the points
+# dropped still give every row within 2 cm; a scan from one side is reported (its parts are single
+# faces, whose width cannot be measured).
+rowloc_cli_test(map_build_defects_survey ON "outliers 0.01, both faces"
+                world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/defects --survey-terrain
+                --step 0.01 --no-octomap --survey-outliers 0.01 --survey-dropout 0.3)
+rowloc_cli_test(map_build_defects_map ON "5 rows \\(10 parts"
+                map build ${_build_out}/defects/survey.pcd -o ${_build_out}/defects/built --origin 45.0703 7.6869 240.0)
+rowloc_cli_test(map_build_defects_meet_the_target ON "PASS: p95"
+                map compare ${_build_out}/defects/built/row-map.geojson ${_build_out}/defects/row-map.geojson
+                --require-p95 0.02)
+set_tests_properties(apps.map_build_defects_survey PROPERTIES FIXTURES_SETUP map_build_defects_survey)
+set_tests_properties(apps.map_build_defects_map PROPERTIES FIXTURES_REQUIRED map_build_defects_survey
+                     FIXTURES_SETUP map_build_defects_map)
+set_tests_properties(apps.map_build_defects_meet_the_target PROPERTIES
+                     FIXTURES_REQUIRED "map_build_defects_survey;map_build_defects_map")
+rowloc_cli_test(map_build_one_sided_survey ON "one-sided"
+                world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/one-sided --survey-terrain
+                --no-octomap --survey-one-sided)
+rowloc_cli_test(map_build_one_sided_is_reported ON "[0-9] parts (without an outline|narrower than).*single canopy faces"
+                map build ${_build_out}/one-sided/survey.pcd -o ${_build_out}/one-sided/built
+                --origin 45.0703 7.6869 240.0)
+set_tests_properties(apps.map_build_one_sided_survey PROPERTIES FIXTURES_SETUP map_build_one_sided_survey)
+set_tests_properties(apps.map_build_one_sided_is_reported PROPERTIES FIXTURES_REQUIRED map_build_one_sided_survey)
+rowloc_cli_test(world_rejects_too_many_outliers OFF "--survey-outliers"
+                world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/x --survey-outliers 0.6)
