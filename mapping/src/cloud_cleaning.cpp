@@ -1,4 +1,4 @@
-// Voxel downsampling (double precision) and PCL's statistical outlier removal (see cloud_cleaning.hpp).
+// Voxel downsampling (double precision) and the statistical outlier removal on FLANN (see cloud_cleaning.hpp).
 #include "rowloc/mapping/cloud_cleaning.hpp"
 
 #include <flann/algorithms/dist.h>

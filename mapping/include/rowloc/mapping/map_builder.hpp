@@ -1,9 +1,9 @@
 // `rowloc map build` (issue 27; docs/mapping.md): survey point cloud -> georeferenced row map, the whole
 // pipeline and its outputs.
 //
-//   read -> clean (cloud_cleaning.hpp) -> terrain (terrain_grid.hpp) -> normalize + band and rows
-//   (row_segmentation.hpp) -> outline per part (row_outline.hpp) -> simplify
-//   (polyline_simplification.hpp) -> write
+//   read in chunks into tiles (tiled_cloud.hpp) -> per tile: clean (cloud_cleaning.hpp), terrain
+//   (terrain_grid.hpp), normalize + band (tile_processing.hpp) -> rows (row_segmentation.hpp) ->
+//   outline per part (row_outline.hpp) -> simplify (polyline_simplification.hpp) -> write
 //
 // Georeferencing. The cloud is either in local ENU metres around a stated WGS84 origin
 // (Georeference::Local), or in UTM metres of a zone (Georeference::Utm, "EPSG:326zz" north,
