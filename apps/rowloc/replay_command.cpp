@@ -7,7 +7,7 @@
 // With --map (a GeoJSON row map, docs/map-format.md) the ultrasonic echoes update the filter
 // against the rows (docs/map-aided-update.md; the method is the filter file's map_aided.method) and
 // the summary counts what happened to every echo; --echo-log FILE writes one line per echo with the
-// position ellipse before and after it (scripts/plot-echoes). --skip withholds a message type
+// position ellipse before and after it (tools/plot-echoes). --skip withholds a message type
 // (counted; ablation runs). A service journal (docs/service.md §8) replays as the service ran it:
 // its header's reorder_window_s orders the messages as the session's window did.
 // --smoothed FILE also writes the fixed-interval (RTS) smoothed estimates at the same times

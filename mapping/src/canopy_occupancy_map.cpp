@@ -6,9 +6,12 @@
 #define OCTOMAP_NODEBUGOUT  // no debug prints on stderr from OctoMap's headers in Debug builds either
 #include <octomap/OcTree.h>
 
+#include <cctype>
 #include <cmath>
 #include <limits>
+#include <istream>
 #include <sstream>
+#include <string>
 #include <utility>
 
 namespace rowloc::mapping {
@@ -103,6 +106,64 @@ struct CanopyOccupancyMap::Impl {
   std::size_t occupied_voxels = 0;
 };
 
+namespace {
+
+struct BinaryHeader {
+  std::size_t size = 0;       ///< nodes of the tree
+  double resolution_m = 0.0;
+};
+
+/// The header of a binary OctoMap file (OctoMap's AbstractOccupancyOcTree::binaryFileHeader line,
+/// then "id OcTree", "size N", "res R", "data", comment lines starting with '#' allowed).
+/// At most 40 characters of a header line, non-printable bytes as '?' (the tree's binary data).
+std::string Shown(const std::string& line) {
+  std::string shown = line.substr(0, 40);
+  for (char& ch : shown) {
+    if (!std::isprint(static_cast<unsigned char>(ch))) ch = '?';
+  }
+  return shown;
+}
+
+BinaryHeader ReadBinaryHeader(std::istream& in, const std::filesystem::path& path) {
+  const auto bad = [&path](const std::string& why) {
+    return OccupancyMapError(path, "not a valid binary OctoMap (.bt) file: " + why);
+  };
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("# Octomap OcTree binary file", 0) != 0) {
+    throw bad("the first line is not '# Octomap OcTree binary file'");
+  }
+  BinaryHeader header;
+  bool have_id = false;
+  bool have_size = false;
+  bool have_res = false;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    std::string key;
+    fields >> key;
+    if (key == "data") {
+      if (!have_id || !have_size || !have_res) throw bad("'data' before 'id', 'size' and 'res'");
+      return header;
+    }
+    if (key == "id") {
+      std::string id;
+      fields >> id;
+      if (id != "OcTree") throw bad("the tree type is '" + id + "', not OcTree");
+      have_id = true;
+    } else if (key == "size") {
+      have_size = static_cast<bool>(fields >> header.size);
+    } else if (key == "res") {
+      have_res = static_cast<bool>(fields >> header.resolution_m);
+    } else {
+      throw bad("unknown header line '" + Shown(line) + "'");
+    }
+    if (!fields) throw bad("malformed header line '" + Shown(line) + "'");
+  }
+  throw bad("no 'data' line");
+}
+
+}  // namespace
+
 CanopyOccupancyMap::CanopyOccupancyMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 CanopyOccupancyMap::~CanopyOccupancyMap() = default;
 CanopyOccupancyMap::CanopyOccupancyMap(CanopyOccupancyMap&&) noexcept = default;
@@ -118,13 +179,17 @@ CanopyOccupancyMap CanopyOccupancyMap::Load(const std::filesystem::path& bt_path
     throw OccupancyMapError(bt_path, e.reason());
   }
   std::istringstream in(std::move(bytes), std::ios::binary);
-  auto impl = std::make_unique<Impl>(0.1);  // readBinary() replaces the resolution
-  if (!impl->tree.readBinary(in)) {
-    throw OccupancyMapError(bt_path, "not a valid binary OctoMap (.bt) file");
-  }
-  const double resolution_m = impl->tree.getResolution();
-  if (!(resolution_m >= kMinResolutionM && resolution_m <= kMaxResolutionM)) {
+  // The header is read here and the tree by OcTree::readBinaryData: OcTree::readBinary does the
+  // same, but the Debian build of OctoMap prints "Reading binary octree type OcTree" on stderr.
+  const BinaryHeader header = ReadBinaryHeader(in, bt_path);
+  if (!(header.resolution_m >= kMinResolutionM && header.resolution_m <= kMaxResolutionM)) {
     throw OccupancyMapError(bt_path, "resolution out of range");
+  }
+  auto impl = std::make_unique<Impl>(header.resolution_m);
+  if (header.size > 0) impl->tree.readBinaryData(in);
+  if (!in || impl->tree.size() != header.size) {
+    throw OccupancyMapError(bt_path, "not a valid binary OctoMap (.bt) file: the tree's data do not match its header (" +
+                                         std::to_string(header.size) + " nodes)");
   }
   impl->occupied_voxels = MeasureOccupied(impl->tree).voxels;
   return CanopyOccupancyMap(std::move(impl));

@@ -73,7 +73,7 @@ rowloc_cli_test(replay_rejects_bad_map OFF "nan_coordinate.geojson"
 rowloc_cli_test(replay_rejects_map_without_rangers OFF "has no ultrasonic sensor to use it"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
                 --map ${PROJECT_SOURCE_DIR}/maps/sample-vineyard.geojson -o ${_replay_out}/x.ndjson)
-# --echo-log: one line per echo with the ellipse before and after it (scripts/plot-echoes); it needs --map.
+# --echo-log: one line per echo with the ellipse before and after it (tools/plot-echoes); it needs --map.
 rowloc_cli_test(replay_writes_echo_log ON "wrote echo log .*vineyard-echoes\\.ndjson: [1-9][0-9]* echoes"
                 replay ${_sim_out}/vineyard/sensors.ndjson --vehicle ${_ugv} --map ${_sim_out}/vineyard/row-map.geojson
                 --echo-log ${_replay_out}/vineyard-echoes.ndjson -o ${_replay_out}/vineyard-map-2.ndjson)

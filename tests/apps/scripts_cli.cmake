@@ -93,21 +93,21 @@ rowloc_command_test(scripts.validate_sim_rejects_malformed_seeds OFF "validate-s
   ${PROJECT_SOURCE_DIR}/scripts/validate-sim --seeds 1,2 $<TARGET_FILE:rowloc> ${CMAKE_CURRENT_BINARY_DIR}/validate-seeds-bad
   slip-odometry-turns)
 
-# ratio-scale-walk (no rowloc): over 30 s the exact posterior of R walks up with the EKF and the
+# tools/ratio-scale-walk (a research tool, no rowloc): over 30 s the exact posterior of R walks up with the EKF and the
 # unscented update (0.254 -> 0.270 m on seed 1), the iterated update walks down; without the
 # speed noise nothing walks.
-set(_walk ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --seeds 1 --duration 30)
-rowloc_command_test(scripts.ratio_scale_walk_exact_posterior_walks ON
+set(_walk ${PROJECT_SOURCE_DIR}/tools/ratio-scale-walk --seeds 1 --duration 30)
+rowloc_command_test(tools.ratio_scale_walk_exact_posterior_walks ON
   "\\| ekf \\| 0\\.2[6-9][0-9]+ .*\\| ukf \\| 0\\.2[6-9][0-9]+ .*\\| iekf \\| 0\\.(1|2[0-4])[0-9]+ .*\\| exact \\| 0\\.2[6-9][0-9]+ "
   ${_walk})
-rowloc_command_test(scripts.ratio_scale_walk_without_speed_noise_stays ON
+rowloc_command_test(tools.ratio_scale_walk_without_speed_noise_stays ON
   "\\| ekf \\| 0\\.25[0-5][0-9] .*\\| exact \\| 0\\.25[0-5][0-9] "
   ${_walk} --speed-noise 0)
-rowloc_command_test(scripts.ratio_scale_walk_rejects_empty_range OFF "empty seed range: 3-1"
-  ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --seeds 3-1)
-rowloc_command_test(scripts.ratio_scale_walk_rejects_a_zero_duration OFF
+rowloc_command_test(tools.ratio_scale_walk_rejects_empty_range OFF "empty seed range: 3-1"
+  ${PROJECT_SOURCE_DIR}/tools/ratio-scale-walk --seeds 3-1)
+rowloc_command_test(tools.ratio_scale_walk_rejects_a_zero_duration OFF
   "--duration and --true-radius must be > 0, --speed-noise >= 0"
-  ${PROJECT_SOURCE_DIR}/scripts/ratio-scale-walk --duration 0)
+  ${PROJECT_SOURCE_DIR}/tools/ratio-scale-walk --duration 0)
 
 # The statistical sweeps run the filter many times over whole scenarios: they measure the tools'
 # results, not new code paths (every path they take is also run once by the apps tests). Label

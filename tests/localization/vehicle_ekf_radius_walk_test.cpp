@@ -1,5 +1,5 @@
 // The rolling radius in pure wheel odometry (docs/localization-filter.md §5.9, item 3;
-// scripts/ratio-scale-walk). Without a fix, omega = v / (R_w (1 - kappa mu)) observes the ratio of
+// tools/ratio-scale-walk). Without a fix, omega = v / (R_w (1 - kappa mu)) observes the ratio of
 // v and R_w, not their common scale. The filter's speed noise is in m/s: under that model a ratio
 // steadier than the speed noise allows is evidence for a larger radius, and the exact posterior
 // walks R_w up as the EKF does. These tests pin that behaviour to its cause: the walk goes with the
@@ -67,7 +67,7 @@ TEST(VehicleEkfRadiusWalk, WithoutSpeedNoiseTheRadiusStays) {
 
 TEST(VehicleEkfRadiusWalk, TheIteratedUpdateWalksTheRadiusDown) {
   // The iterated update's fixed point is the mode of the ratio's posterior, which moves (v, R_w)
-  // towards the origin (scripts/ratio-scale-walk: it collapses there without the IMU and the
+  // towards the origin (tools/ratio-scale-walk: it collapses there without the IMU and the
   // radius bound). Measured here, not endorsed.
   FilterConfig config;
   config.wheels.speed_update_iterations = 3;

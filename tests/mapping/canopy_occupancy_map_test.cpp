@@ -184,6 +184,36 @@ TEST(CanopyOccupancyMap, LoadRejectsMissingAndGarbageFiles) {
   EXPECT_THROW(CanopyOccupancyMap::Load(dir / "text.bt"), OccupancyMapError);
 }
 
+TEST(CanopyOccupancyMap, LoadChecksTheHeaderAgainstTheTree) {
+  // A real file, then the same file with its header changed: each is refused with the reason.
+  test::ScratchDir dir;
+  PointCloud cloud;
+  for (int k = 0; k < 50; ++k) cloud.points_m.emplace_back(0.1 * k, 0.0, 1.0);
+  WriteOctoMap(cloud, OctoMapOptions{0.05}, dir / "good.bt");
+  std::stringstream good;
+  good << std::ifstream(dir / "good.bt", std::ios::binary).rdbuf();
+  const std::string bytes = good.str();
+  EXPECT_EQ(CanopyOccupancyMap::Load(dir / "good.bt").occupied_leaves(), 50U);
+  const auto expect_refused = [&](const std::string& from, const std::string& to, const std::string& reason) {
+    std::string patched = bytes;
+    const auto at = patched.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    patched.replace(at, from.size(), to);
+    std::ofstream(dir / "patched.bt", std::ios::binary) << patched;
+    try {
+      CanopyOccupancyMap::Load(dir / "patched.bt");
+      ADD_FAILURE() << "accepted: " << to;
+    } catch (const OccupancyMapError& e) {
+      EXPECT_THAT(e.what(), ::testing::HasSubstr(reason)) << to;
+    }
+  };
+  expect_refused("id OcTree", "id ColorOcTree", "the tree type is 'ColorOcTree', not OcTree");
+  expect_refused("\nsize ", "\nsize 9", "do not match its header");  // one more digit: more nodes than the data
+  expect_refused("\ndata\n", "\n", "unknown header line '");  // the tree's bytes, shown as '?'
+  expect_refused("id OcTree", "data", "'data' before 'id', 'size' and 'res'");
+  expect_refused("\nres ", "\nrez ", "unknown header line 'rez ");
+}
+
 TEST(CanopyOccupancyMap, LoadReadsOnlyARegularFileOfBoundedSize) {
   // Issue 26 sibling: a FIFO, a device or a directory was "no such file", and OctoMap read the first
   // line of any regular file whole (a 256 MiB line of zeros: 256 MiB held).
