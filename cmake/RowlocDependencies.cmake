@@ -13,7 +13,12 @@ list(APPEND CMAKE_MODULE_PATH /usr/share/cmake/geographiclib)
 find_package(GeographicLib 2.1 REQUIRED)
 # No VTK part of PCL is used; not finding VTK cuts every link by seconds.
 set(CMAKE_DISABLE_FIND_PACKAGE_VTK ON)
-find_package(PCL 1.13 REQUIRED COMPONENTS common io kdtree search filters)
+find_package(PCL 1.13 REQUIRED COMPONENTS common io)
+# FLANN (libflann-dev, a PCL dependency) is used header-only by mapping's outlier removal; its
+# headers call LZ4 (serialization), so liblz4 is linked. FLANN's own CMake target would link its
+# whole static library into every program.
+find_path(ROWLOC_FLANN_INCLUDE_DIR flann/algorithms/kdtree_single_index.h REQUIRED)
+find_library(ROWLOC_LZ4_LIBRARY lz4 REQUIRED)
 if(ROWLOC_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

@@ -53,7 +53,8 @@ void RunBuild(const BuildOptions& o) {
   // Before the survey is read: no output may name an input, or replace a device or directory.
   const std::filesystem::path dir(o.output_dir);
   std::vector<NamedPath> outputs;
-  for (const char* name : {"row-map.geojson", "dtm.json", "map.svg", "report.txt", "report.json", "canopy.bt"}) {
+  for (const char* name :
+       {"row-map.geojson", "dtm.json", "map.svg", "report.txt", "report.json", "canopy.bt", "meshes.ply"}) {
     outputs.push_back({"--output", (dir / name).string()});
   }
   CheckCommandFiles({{"survey", o.survey_path}, {"--config", o.config_path}}, outputs);
@@ -74,6 +75,9 @@ void RunBuild(const BuildOptions& o) {
     fmt::print("{}: {}\n  map: {}\n  report: {}\n  dtm: {}\n  svg: {}\n", o.survey_path, result.message,
                (out / "row-map.geojson").string(), (out / "report.txt").string(), (out / "dtm.json").string(),
                (out / "map.svg").string());
+    if (!result.meshes.triangles.empty()) {
+      fmt::print("  meshes: {} ({} triangles)\n", (out / "meshes.ply").string(), result.meshes.triangles.size());
+    }
     if (o.octomap_resolution_m > 0.0) fmt::print("  octomap: {}\n", (out / "canopy.bt").string());
   } else {
     fmt::print("{}: {}\n  no map written; report: {}\n", o.survey_path, result.message,
@@ -120,7 +124,8 @@ void RegisterMapBuildCommands(CLI::App& app) {
 
   auto build = std::make_shared<BuildOptions>();
   CLI::App* b = map->add_subcommand(
-      "build", "Build a row map from a survey point cloud: row-map.geojson, dtm.json, report.txt/json, map.svg");
+      "build",
+      "Build a row map from a survey point cloud: row-map.geojson, meshes.ply, dtm.json, report.txt/json, map.svg");
   b->add_option("survey", build->survey_path, "Survey point cloud (.ply, .pcd or .las)")->required();
   b->add_option("-o,--output", build->output_dir, "Output directory")->required();
   CLI::Option* crs = b->add_option("--crs", build->crs, "The cloud is in UTM metres: EPSG:326zz (north) or EPSG:327zz (south)");

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -116,10 +117,21 @@ std::vector<float> MeanNeighbourDistances(std::vector<float>& xyz, int neighbour
     }
   };
   const std::size_t parts = static_cast<std::size_t>(std::max(1, threads));
+  std::vector<std::exception_ptr> errors(parts);
+  const auto guarded = [&](std::size_t t) {
+    try {
+      run(t * n / parts, (t + 1) * n / parts);
+    } catch (...) {
+      errors[t] = std::current_exception();  // rethrown on the calling thread
+    }
+  };
   std::vector<std::thread> workers;
-  for (std::size_t t = 1; t < parts; ++t) workers.emplace_back(run, t * n / parts, (t + 1) * n / parts);
-  run(0, n / parts);
+  for (std::size_t t = 1; t < parts; ++t) workers.emplace_back(guarded, t);
+  guarded(0);
   for (auto& w : workers) w.join();
+  for (const auto& e : errors) {
+    if (e) std::rethrow_exception(e);
+  }
   return distances;
 }
 

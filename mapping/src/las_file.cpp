@@ -267,6 +267,23 @@ LasHeader ReadLasHeader(std::istream& in, const std::filesystem::path& name) {
   return h;
 }
 
+namespace {
+
+/// Room for `count` points, or a PointCloudError instead of std::bad_alloc.
+void Reserve(LasCloud& cloud, std::size_t count, const std::filesystem::path& name) {
+  try {
+    cloud.points_m.reserve(count);
+    cloud.intensity.reserve(count);
+    cloud.classification.reserve(count);
+  } catch (const std::bad_alloc&) {
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+  } catch (const std::length_error&) {
+    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
+  }
+}
+
+}  // namespace
+
 void ForEachLasChunk(std::istream& in, const LasHeader& header, const std::filesystem::path& name,
                      std::size_t chunk_points, const std::function<void(const LasCloud&)>& visit) {
   if (chunk_points == 0) throw std::invalid_argument("ForEachLasChunk: chunk_points must be positive");
@@ -274,16 +291,7 @@ void ForEachLasChunk(std::istream& in, const LasHeader& header, const std::files
   const std::size_t count = static_cast<std::size_t>(h.point_count);
   LasCloud chunk;
   chunk.header = header;
-  const std::size_t capacity = std::min(count, chunk_points);
-  try {
-    chunk.points_m.reserve(capacity);
-    chunk.intensity.reserve(capacity);
-    chunk.classification.reserve(capacity);
-  } catch (const std::bad_alloc&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(capacity) + " points");
-  } catch (const std::length_error&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(capacity) + " points");
-  }
+  Reserve(chunk, std::min(count, chunk_points), name);
   in.clear();
   in.seekg(static_cast<std::streamoff>(h.offset_to_point_data), std::ios::beg);
   const bool legacy_format = h.point_format < 6;
@@ -320,16 +328,7 @@ void ForEachLasChunk(std::istream& in, const LasHeader& header, const std::files
 LasCloud ReadLas(std::istream& in, const std::filesystem::path& name) {
   LasCloud cloud;
   cloud.header = ReadLasHeader(in, name);
-  const std::size_t count = static_cast<std::size_t>(cloud.header.point_count);
-  try {
-    cloud.points_m.reserve(count);
-    cloud.intensity.reserve(count);
-    cloud.classification.reserve(count);
-  } catch (const std::bad_alloc&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
-  } catch (const std::length_error&) {
-    throw PointCloudError(name, "not enough memory to read " + std::to_string(count) + " points");
-  }
+  Reserve(cloud, static_cast<std::size_t>(cloud.header.point_count), name);
   ForEachLasChunk(in, cloud.header, name, std::size_t{1} << 20, [&cloud](const LasCloud& chunk) {
     cloud.points_m.insert(cloud.points_m.end(), chunk.points_m.begin(), chunk.points_m.end());
     cloud.intensity.insert(cloud.intensity.end(), chunk.intensity.begin(), chunk.intensity.end());

@@ -63,6 +63,10 @@ const std::vector<Field>& Fields() {
       ROWLOC_NUMBER("outline", outline.end_exclusion_m, "end_exclusion_m", 0.0, 5.0),
       ROWLOC_NUMBER("outline", outline.min_width_m, "min_width_m", 0.0, 10.0),
       ROWLOC_NUMBER("outline", outline.simplify_tolerance_m, "simplify_tolerance_m", 0.0, 10.0),
+      ROWLOC_INTEGER("mesh", mesh.levels, "levels", 0, 20),
+      ROWLOC_NUMBER("mesh", mesh.lowest_m, "lowest_m", 0.0, 20.0),
+      ROWLOC_NUMBER("mesh", mesh.highest_m, "highest_m", 0.0, 20.0),
+      ROWLOC_NUMBER("mesh", mesh.vertex_spacing_m, "vertex_spacing_m", 0.05, 10.0),
   };
   return fields;
 }
@@ -70,7 +74,7 @@ const std::vector<Field>& Fields() {
 #undef ROWLOC_INTEGER
 
 const std::vector<const char*>& Sections() {
-  static const std::vector<const char*> sections = {"tiles", "clean", "terrain", "band", "rows", "outline"};
+  static const std::vector<const char*> sections = {"tiles", "clean", "terrain", "band", "rows", "outline", "mesh"};
   return sections;
 }
 
@@ -82,6 +86,15 @@ std::string FormatNumber(double value) {
 }
 
 }  // namespace
+
+std::vector<double> MeshLevelHeights(const MeshParams& mesh) {
+  std::vector<double> heights;
+  for (int k = 0; k < mesh.levels; ++k) {
+    heights.push_back(mesh.levels == 1 ? mesh.lowest_m
+                                       : mesh.lowest_m + (mesh.highest_m - mesh.lowest_m) * k / (mesh.levels - 1));
+  }
+  return heights;
+}
 
 std::optional<std::string> ValidateMapBuildConfig(const MapBuildConfig& config) {
   MapBuildConfig copy = config;
@@ -96,6 +109,11 @@ std::optional<std::string> ValidateMapBuildConfig(const MapBuildConfig& config) 
   if (config.tiles.overlap_m < config.terrain.classification_radius_m) {
     return "tiles.overlap_m: must be at least terrain.classification_radius_m (" +
            FormatNumber(config.terrain.classification_radius_m) + "), got " + FormatNumber(config.tiles.overlap_m);
+  }
+  if (config.mesh.levels == 1) return std::string("mesh.levels: must be 0 (no meshes) or at least 2, got 1");
+  if (config.mesh.levels >= 2 && !(config.mesh.highest_m > config.mesh.lowest_m)) {
+    return "mesh.highest_m: must be above mesh.lowest_m (" + FormatNumber(config.mesh.lowest_m) + "), got " +
+           FormatNumber(config.mesh.highest_m);
   }
   return std::nullopt;
 }

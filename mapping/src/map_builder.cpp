@@ -5,6 +5,7 @@
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
+#include "rowloc/mapping/part_meshes.hpp"
 #include "rowloc/mapping/polyline_simplification.hpp"
 #include "rowloc/mapping/row_outline.hpp"
 #include "rowloc/mapping/row_segmentation.hpp"
@@ -185,12 +186,16 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
   geometry::RowMap map;
   map.origin = origin;
   std::size_t row_number = 0;
+  std::vector<std::vector<Eigen::Vector2d>> traced_outlines;  // per part (flattened), for the meshes
+  std::vector<int> part_report;                               // per part: its index in result.parts, or -1
   for (const DetectedRow& row : detection.rows) {
     std::vector<std::pair<PartReport, std::vector<Eigen::Vector2d>>> outlines;
     for (const RowPart& part : row.parts) {
       start = Clock::now();
       const PartOutline outline = TraceOutline(part.points_m, config.outline);
       outline_seconds += SecondsSince(start);
+      traced_outlines.push_back(outline.polygon_m);
+      part_report.push_back(-1);
       if (outline.polygon_m.size() < 3) {
         ++result.outlines_failed;
         continue;
@@ -214,6 +219,7 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
       report.vertices = polygon.size();
       traced_vertices += report.traced_vertices;
       map_vertices += report.vertices;
+      part_report.back() = static_cast<int>(result.parts.size() + outlines.size());
       outlines.emplace_back(report, std::move(polygon));
     }
     if (outlines.empty()) continue;
@@ -229,6 +235,29 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
   result.rows = row_number;
   result.stages.push_back({"outline: traced", traced_vertices, "vertices", outline_seconds});
   result.stages.push_back({"simplify: CGAL Polyline_simplification_2", map_vertices, "vertices", simplify_seconds});
+
+  // 5-6, mesh route: a lofted mesh per part, in the map frame (z: height of the terrain plus h).
+  start = Clock::now();
+  for (std::size_t k = 0; k < traced_outlines.size(); ++k) {
+    if (part_report[k] < 0) traced_outlines[k].clear();  // not in the map: no mesh either
+  }
+  const std::vector<PartMesh> meshes = BuildPartMeshes(detection, std::move(survey.level_band_m), traced_outlines, config);
+  const double z0 = frame ? origin.altitude_m : 0.0;
+  for (std::size_t k = 0; k < meshes.size(); ++k) {
+    if (!meshes[k].mesh || part_report[k] < 0) continue;
+    PartReport& report = result.parts[static_cast<std::size_t>(part_report[k])];
+    report.mesh_levels = meshes[k].levels;
+    report.mesh_triangles = meshes[k].mesh->triangles.size();
+    report.mesh_slice_max_m = meshes[k].slice_max_m;
+    const int offset = static_cast<int>(result.meshes.vertices_m.size());
+    for (const Eigen::Vector3d& v : meshes[k].mesh->vertices_m) {
+      const Eigen::Vector2d xy = to_map(v.head<2>());
+      result.meshes.vertices_m.emplace_back(xy.x(), xy.y(), v.z() + result.terrain->HeightAt(v.head<2>()) - z0);
+    }
+    for (const auto& t : meshes[k].mesh->triangles) result.meshes.triangles.push_back({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  result.stages.push_back({"mesh: lofted outlines, CGAL slicer check", result.meshes.triangles.size(), "triangles",
+                           SecondsSince(start)});
 
   if (map.rows.empty()) {
     result.message = fmt::format(
@@ -255,7 +284,6 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
   }
 
   if (keep_canopy) {
-    const double z0 = frame ? origin.altitude_m : 0.0;
     result.canopy_m.points_m.reserve(survey.canopy_m.size());
     for (const Eigen::Vector3d& p : survey.canopy_m) {
       const Eigen::Vector2d xy = to_map(p.head<2>());
@@ -383,6 +411,12 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   WriteText(request.output_dir / "dtm.json", dtm_json.dump() + "\n");
   WriteText(request.output_dir / "map.svg", FormatMapSvg(result));
   result.stages.push_back({"write", result.map ? result.map->SegmentCount() : 0, "segments", SecondsSince(start)});
+  const std::filesystem::path meshes_path = request.output_dir / "meshes.ply";
+  if (!result.meshes.triangles.empty()) {
+    WriteTriangleMeshPly(result.meshes.vertices_m, result.meshes.triangles, meshes_path);
+  } else {
+    std::filesystem::remove(meshes_path, ec);
+  }
   const std::filesystem::path octomap_path = request.output_dir / "canopy.bt";
   if (request.octomap_resolution_m) {
     start = Clock::now();
@@ -399,6 +433,7 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   std::error_code size_error;
   const auto cloud_bytes = std::filesystem::file_size(request.survey_path, size_error);
   const std::uintmax_t map_bytes = result.map ? std::filesystem::file_size(map_path) : 0;
+  const std::uintmax_t mesh_bytes = result.meshes.triangles.empty() ? 0 : std::filesystem::file_size(meshes_path);
   result.wall_seconds = SecondsSince(wall_start);
   const double total_seconds = result.wall_seconds;
   nlohmann::ordered_json report;
@@ -412,6 +447,9 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   report["cloud_bytes"] = size_error ? 0 : cloud_bytes;
   report["map_bytes"] = map_bytes;
   report["data_reduction"] = map_bytes > 0 && !size_error ? static_cast<double>(cloud_bytes) / map_bytes : 0.0;
+  report["mesh_bytes"] = mesh_bytes;
+  report["data_reduction_with_meshes"] =
+      map_bytes > 0 && !size_error ? static_cast<double>(cloud_bytes) / static_cast<double>(map_bytes + mesh_bytes) : 0.0;
   report["total_seconds"] = total_seconds;
   report["tiles"] = {{"size_m", request.config.tiles.size_m}, {"overlap_m", request.config.tiles.overlap_m},
                      {"count", result.tiles}, {"threads", result.tile_threads},
@@ -423,8 +461,12 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   report["stages"] = std::move(stages);
   nlohmann::ordered_json parts = nlohmann::ordered_json::array();
   for (const auto& p : result.parts) {
-    parts.push_back({{"id", p.id}, {"points", p.points}, {"length_m", Round(p.length_m, 0.001)},
-                     {"traced_vertices", p.traced_vertices}, {"vertices", p.vertices}, {"simplified", p.simplified}});
+    nlohmann::ordered_json part = {{"id", p.id}, {"points", p.points}, {"length_m", Round(p.length_m, 0.001)},
+                                   {"traced_vertices", p.traced_vertices}, {"vertices", p.vertices},
+                                   {"simplified", p.simplified}, {"mesh_levels", p.mesh_levels},
+                                   {"mesh_triangles", p.mesh_triangles}};
+    part["mesh_slice_max_m"] = p.mesh_slice_max_m ? nlohmann::ordered_json(Round(*p.mesh_slice_max_m, 1e-4)) : nullptr;
+    parts.push_back(std::move(part));
   }
   report["row_parts"] = std::move(parts);
   report["outlines_failed"] = result.outlines_failed;
@@ -443,13 +485,19 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
                       request.config.tiles.size_m, request.config.tiles.overlap_m, result.tile_threads,
                       result.largest_tile_points);
   if (!result.parts.empty()) {
-    text += "  part                 points  length [m]  traced  vertices  simplified\n";
+    text += "  part                 points  length [m]  traced  vertices  simplified  mesh: levels triangles slice-max [m]\n";
     for (const auto& p : result.parts) {
-      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>6}  {:>8}  {}\n", p.id, p.points, p.length_m,
-                          p.traced_vertices, p.vertices, p.simplified ? "yes" : "no (not simple)");
+      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>6}  {:>8}  {:<10}  {:>12} {:>9} {:>13}\n", p.id, p.points,
+                          p.length_m, p.traced_vertices, p.vertices, p.simplified ? "yes" : "no", p.mesh_levels,
+                          p.mesh_triangles, p.mesh_slice_max_m ? fmt::format("{:.4f}", *p.mesh_slice_max_m) : "-");
     }
     text += fmt::format("\n  map: {} ({} bytes); data reduction {:.0f} : 1\n", map_path.string(), map_bytes,
                         report["data_reduction"].get<double>());
+    if (mesh_bytes > 0) {
+      text += fmt::format("  meshes: {} ({} bytes, {} triangles); data reduction with the meshes {:.0f} : 1\n",
+                          meshes_path.string(), mesh_bytes, result.meshes.triangles.size(),
+                          report["data_reduction_with_meshes"].get<double>());
+    }
   }
   WriteText(request.output_dir / "report.txt", text);
   return result;

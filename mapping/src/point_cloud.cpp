@@ -7,6 +7,9 @@
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/PolygonMesh.h>
+#include <pcl/conversions.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 
@@ -18,6 +21,7 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <functional>
 #include <new>
 #include <optional>
 #include <stdexcept>
@@ -246,31 +250,20 @@ std::size_t ForEachPointChunk(const std::filesystem::path& path, std::size_t chu
   return cloud.points_m.size();
 }
 
-void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path) {
-  const CloudFormat format = RequireFormat(path);
-  if (cloud.points_m.empty()) throw PointCloudError(path, "refusing to write an empty cloud");
-  RejectNonFinite(cloud.points_m, path);
-  if (cloud.points_m.size() > std::size_t{UINT32_MAX} / (3 * sizeof(double))) {
-    throw PointCloudError(path, "too many points for one PCL cloud");
-  }
-  const pcl::PCLPointCloud2 blob = ToBlob(cloud.points_m);
-  std::optional<mapio::OutputFile> file;  // a temporary next to the target, renamed over it on success
+namespace {
+
+/// Runs `write` (PCL, returning its status) on a temporary next to `path`, renamed over it on
+/// success (mapio::OutputFile); every failure is a PointCloudError naming `path`.
+void WriteThroughTemporary(const std::filesystem::path& path, const std::function<int(const std::string&)>& write) {
+  std::optional<mapio::OutputFile> file;
   try {
     file.emplace(path);
   } catch (const mapio::OutputFileError& e) {
     throw PointCloudError(path, e.what());
   }
-  const std::string temporary = file->temporary_path().string();
   int status = -1;
   try {
-    if (format == CloudFormat::kPly) {
-      pcl::PLYWriter writer;
-      status = writer.writeBinary(temporary, blob, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(),
-                                  /*use_camera=*/false);
-    } else {
-      pcl::PCDWriter writer;
-      status = writer.writeBinary(temporary, blob);
-    }
+    status = write(file->temporary_path().string());
   } catch (const std::exception& e) {
     throw PointCloudError(path, std::string("PCL could not write the file: ") + e.what());
   }
@@ -282,6 +275,57 @@ void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path)
   } catch (const mapio::OutputFileError& e) {
     throw PointCloudError(path, e.what());
   }
+}
+
+}  // namespace
+
+void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path) {
+  const CloudFormat format = RequireFormat(path);
+  if (cloud.points_m.empty()) throw PointCloudError(path, "refusing to write an empty cloud");
+  RejectNonFinite(cloud.points_m, path);
+  if (cloud.points_m.size() > std::size_t{UINT32_MAX} / (3 * sizeof(double))) {
+    throw PointCloudError(path, "too many points for one PCL cloud");
+  }
+  const pcl::PCLPointCloud2 blob = ToBlob(cloud.points_m);
+  WriteThroughTemporary(path, [&](const std::string& temporary) {
+    if (format == CloudFormat::kPly) {
+      pcl::PLYWriter writer;
+      return writer.writeBinary(temporary, blob, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity(),
+                                /*use_camera=*/false);
+    }
+    pcl::PCDWriter writer;
+    return writer.writeBinary(temporary, blob);
+  });
+}
+
+void WriteTriangleMeshPly(const std::vector<Eigen::Vector3d>& vertices_m,
+                          const std::vector<std::array<int, 3>>& triangles, const std::filesystem::path& path) {
+  if (RequireFormat(path) != CloudFormat::kPly) throw PointCloudError(path, "a mesh is written as .ply only");
+  if (vertices_m.empty() || triangles.empty()) throw PointCloudError(path, "refusing to write an empty mesh");
+  RejectNonFinite(vertices_m, path);
+  if (vertices_m.size() > std::size_t{UINT32_MAX} / (3 * sizeof(double))) {
+    throw PointCloudError(path, "too many vertices for one PCL mesh");
+  }
+  // PCL's mesh writer takes float x, y, z only: fine in the map's local frame (1 mm up to 16 km).
+  pcl::PointCloud<pcl::PointXYZ> vertices;
+  for (const auto& v : vertices_m) {
+    vertices.push_back(pcl::PointXYZ(static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())));
+  }
+  pcl::PolygonMesh mesh;
+  pcl::toPCLPointCloud2(vertices, mesh.cloud);
+  mesh.polygons.reserve(triangles.size());
+  for (const auto& t : triangles) {
+    for (const int v : t) {
+      if (v < 0 || static_cast<std::size_t>(v) >= vertices_m.size()) {
+        throw PointCloudError(path, "a triangle refers to vertex " + std::to_string(v) + " of " +
+                                        std::to_string(vertices_m.size()));
+      }
+    }
+    pcl::Vertices face;
+    face.vertices = {static_cast<pcl::index_t>(t[0]), static_cast<pcl::index_t>(t[1]), static_cast<pcl::index_t>(t[2])};
+    mesh.polygons.push_back(std::move(face));
+  }
+  WriteThroughTemporary(path, [&](const std::string& temporary) { return pcl::io::savePLYFileBinary(temporary, mesh); });
 }
 
 }  // namespace rowloc::mapping

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <unordered_map>
 #include <utility>
 
 namespace rowloc::mapping {
@@ -301,6 +302,45 @@ RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const
     result.rows.push_back(std::move(row));
   }
   return result;
+}
+
+std::vector<std::vector<Eigen::Vector2d>> AssignPointsToParts(const RowDetection& detection,
+                                                              const std::vector<Eigen::Vector2d>& points_m,
+                                                              double radius_m) {
+  if (!(radius_m > 0.0) || !std::isfinite(radius_m)) {
+    throw std::invalid_argument("AssignPointsToParts: radius_m must be positive");
+  }
+  struct CellHash {
+    std::size_t operator()(const std::pair<std::int64_t, std::int64_t>& c) const {
+      return std::hash<std::int64_t>()(c.first * 73856093 ^ c.second * 19349663);
+    }
+  };
+  const auto cell_of = [radius_m](const Eigen::Vector2d& p) {
+    return std::make_pair(static_cast<std::int64_t>(std::floor(p.x() / radius_m)),
+                          static_cast<std::int64_t>(std::floor(p.y() / radius_m)));
+  };
+  std::unordered_map<std::pair<std::int64_t, std::int64_t>, int, CellHash> owner;
+  int parts = 0;
+  for (const DetectedRow& row : detection.rows) {
+    for (const RowPart& part : row.parts) {
+      for (const auto& p : part.points_m) owner.emplace(cell_of(p), parts);  // the first part keeps a cell
+      ++parts;
+    }
+  }
+  std::vector<std::vector<Eigen::Vector2d>> assigned(static_cast<std::size_t>(parts));
+  for (const auto& p : points_m) {
+    const auto [i, j] = cell_of(p);
+    int found = -1;
+    for (int d = 0; d < 10 && found < 0; ++d) {
+      // The point's own cell first, then its neighbours.
+      const std::int64_t di = d == 0 ? 0 : (d - 1) % 3 - 1;
+      const std::int64_t dj = d == 0 ? 0 : (d - 1) / 3 - 1;
+      const auto it = owner.find({i + di, j + dj});
+      if (it != owner.end()) found = it->second;
+    }
+    if (found >= 0) assigned[static_cast<std::size_t>(found)].push_back(p);
+  }
+  return assigned;
 }
 
 }  // namespace rowloc::mapping

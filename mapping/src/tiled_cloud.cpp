@@ -92,6 +92,11 @@ void TiledCloud::Add(const std::vector<Eigen::Vector3d>& points_m) {
     if (!p.allFinite()) {
       throw std::invalid_argument(fmt::format("TiledCloud: point {} is not finite", point_count_ + 1));
     }
+    if (std::abs(p.x()) > kMaxHorizontalCoordinateM || std::abs(p.y()) > kMaxHorizontalCoordinateM) {
+      throw std::invalid_argument(fmt::format(
+          "TiledCloud: point {} at ({:g}, {:g}) m lies beyond 10^9 m of the origin: not a survey in metres",
+          point_count_ + 1, p.x(), p.y()));
+    }
     const Eigen::Vector2d xy = p.head<2>();
     if (!layout_) {
       layout_.emplace(size_m_, overlap_m_, Eigen::Vector2d::Zero());

@@ -24,7 +24,7 @@ file(MAKE_DIRECTORY ${_build_out})
 rowloc_cli_test(map_build_world_survey ON "gappy.json"
                 world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/gappy --survey-terrain
                 --step 0.01 --no-octomap)
-rowloc_cli_test(map_build_builds_the_rows ON "5 rows \\(10 parts"
+rowloc_cli_test(map_build_builds_the_rows ON "5 rows \\(10 parts.*meshes: .*meshes\\.ply \\([0-9]+ triangles\\)"
                 map build ${_build_out}/gappy/survey.pcd -o ${_build_out}/gappy/built --origin 45.0703 7.6869 240.0
                 --config ${PROJECT_SOURCE_DIR}/config/mapping/default.json)
 rowloc_cli_test(map_build_result_reads_back ON "rows: 10, segments: " map info ${_build_out}/gappy/built/row-map.geojson)
@@ -55,21 +55,27 @@ rowloc_cli_test(map_build_rejects_bad_crs OFF "--crs 'EPSG:4326'" map build none
                 --crs EPSG:4326)
 rowloc_cli_test(map_build_rejects_empty_cloud OFF "empty\\.pcd" map build ${_mapping_data}/empty.pcd
                 -o ${_build_out}/x --origin 45.0703 7.6869 240.0)
+# A world's survey (rowloc world ... ARGN) -> rowloc map build (output matching parts_regex) ->
+# rowloc map compare --require-p95 0.02 (every true part found, none invented): three tests chained
+# by fixtures, named map_build_<name>_survey, _map and _meets_the_target.
+function(rowloc_map_build_target_test name world parts_regex)
+  set(_dir ${_build_out}/${name})
+  rowloc_cli_test(map_build_${name}_survey ON "${world}\\.json"
+                  world ${PROJECT_SOURCE_DIR}/config/worlds/${world}.json -o ${_dir} --survey-terrain
+                  --step 0.01 --no-octomap ${ARGN})
+  rowloc_cli_test(map_build_${name}_map ON "${parts_regex}"
+                  map build ${_dir}/survey.pcd -o ${_dir}/built --origin 45.0703 7.6869 240.0)
+  rowloc_cli_test(map_build_${name}_meets_the_target ON "PASS: p95"
+                  map compare ${_dir}/built/row-map.geojson ${_dir}/row-map.geojson --require-p95 0.02)
+  set_tests_properties(apps.map_build_${name}_survey PROPERTIES FIXTURES_SETUP map_build_${name}_survey)
+  set_tests_properties(apps.map_build_${name}_map PROPERTIES FIXTURES_REQUIRED map_build_${name}_survey
+                       FIXTURES_SETUP map_build_${name}_map)
+  set_tests_properties(apps.map_build_${name}_meets_the_target PROPERTIES
+                       FIXTURES_REQUIRED "map_build_${name}_survey;map_build_${name}_map")
+endfunction()
 # The hardest shipped world (S-curve, gaps, slopes, undulation, 1.5 cm roughness) meets the issue's
 # target: p95 <= 2 cm, every true part found, none invented (scripts/map-quality runs all worlds).
-rowloc_cli_test(map_build_curved_world_survey ON "curved.json"
-                world ${PROJECT_SOURCE_DIR}/config/worlds/curved.json -o ${_build_out}/curved --survey-terrain
-                --step 0.01 --no-octomap)
-rowloc_cli_test(map_build_curved_world_map ON "5 rows \\(8 parts"
-                map build ${_build_out}/curved/survey.pcd -o ${_build_out}/curved/built --origin 45.0703 7.6869 240.0)
-rowloc_cli_test(map_build_curved_world_meets_the_target ON "PASS: p95"
-                map compare ${_build_out}/curved/built/row-map.geojson ${_build_out}/curved/row-map.geojson
-                --require-p95 0.02)
-set_tests_properties(apps.map_build_curved_world_survey PROPERTIES FIXTURES_SETUP map_build_curved_survey)
-set_tests_properties(apps.map_build_curved_world_map PROPERTIES FIXTURES_REQUIRED map_build_curved_survey
-                     FIXTURES_SETUP map_build_curved_map)
-set_tests_properties(apps.map_build_curved_world_meets_the_target PROPERTIES
-                     FIXTURES_REQUIRED "map_build_curved_survey;map_build_curved_map")
+rowloc_map_build_target_test(curved_world curved "5 rows \\(8 parts")
 # Progress bars on request (on a terminal by default), one per stage; a bad --progress is refused.
 rowloc_cli_test(map_build_draws_progress_bars ON "clean +\\[#+\\] [0-9]+/[0-9]+.*terrain +\\[#+\\] [0-9]+/[0-9]+"
                 map build ${_build_out}/gappy/survey.pcd -o ${_build_out}/progress --origin 45.0703 7.6869 240.0
@@ -80,19 +86,7 @@ rowloc_cli_test(map_build_rejects_bad_progress OFF "--progress"
 # Scan defects (rowloc world --survey-*): 1 % outliers (below the ground too) and 30 % of the points
 # dropped still give every row within 2 cm; a scan from one side is reported (its parts are single
 # faces, whose width cannot be measured).
-rowloc_cli_test(map_build_defects_survey ON "outliers 0.01, both faces"
-                world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/defects --survey-terrain
-                --step 0.01 --no-octomap --survey-outliers 0.01 --survey-dropout 0.3)
-rowloc_cli_test(map_build_defects_map ON "5 rows \\(10 parts"
-                map build ${_build_out}/defects/survey.pcd -o ${_build_out}/defects/built --origin 45.0703 7.6869 240.0)
-rowloc_cli_test(map_build_defects_meet_the_target ON "PASS: p95"
-                map compare ${_build_out}/defects/built/row-map.geojson ${_build_out}/defects/row-map.geojson
-                --require-p95 0.02)
-set_tests_properties(apps.map_build_defects_survey PROPERTIES FIXTURES_SETUP map_build_defects_survey)
-set_tests_properties(apps.map_build_defects_map PROPERTIES FIXTURES_REQUIRED map_build_defects_survey
-                     FIXTURES_SETUP map_build_defects_map)
-set_tests_properties(apps.map_build_defects_meet_the_target PROPERTIES
-                     FIXTURES_REQUIRED "map_build_defects_survey;map_build_defects_map")
+rowloc_map_build_target_test(defects gappy "5 rows \\(10 parts" --survey-outliers 0.01 --survey-dropout 0.3)
 rowloc_cli_test(map_build_one_sided_survey ON "one-sided"
                 world ${PROJECT_SOURCE_DIR}/config/worlds/gappy.json -o ${_build_out}/one-sided --survey-terrain
                 --no-octomap --survey-one-sided)

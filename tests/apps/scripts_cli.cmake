@@ -116,3 +116,18 @@ rowloc_command_test(tools.ratio_scale_walk_rejects_a_zero_duration OFF
 set_property(TEST scripts.tune_noise_identifies_the_range_sigma_with_the_map scripts.validate_sim_sweeps_seeds
              scripts.seed_sweep_with_the_row_map scripts.tune_noise_identifies_the_wheel_sigma
              APPEND PROPERTY LABELS sweep)
+
+# The map build's quality table on one world, with its scan defects (docs/mapping.md): every part
+# found within 2 cm, and a map with meshes; and the built map in the map-aided filter on one
+# scenario (the table's ratio is reported, not required: docs/mapping.md "End to end").
+rowloc_script_test(map_quality_gappy_with_outliers ON
+  "\\| gappy-outliers \\| 5 / 5 \\| 10 / 10 \\| 0 / 0 \\| 0\\.[0-9]+ \\| [0-9.]+ \\|.*\\| [0-9]+ / [0-9.]+ \\| [0-9]+ \\|"
+  map-quality --out ${CMAKE_CURRENT_BINARY_DIR}/map-quality --require-p95 0.02 --survey "--survey-outliers 0.01"
+  --label outliers gappy)
+rowloc_script_test(map_quality_rejects_an_unknown_world OFF "config/worlds/nowhere\\.json"
+  map-quality --out ${CMAKE_CURRENT_BINARY_DIR}/map-quality-bad nowhere)
+rowloc_script_test(map_end_to_end_straight_rows ON
+  "\\| vineyard-002-4us \\| 6 \\| [0-9.]+ / [0-9.]+ \\| [0-9.]+ / [0-9.]+ \\| [0-9.]+ \\| [0-9.]+ / [0-9.]+ \\|"
+  map-end-to-end --out ${CMAKE_CURRENT_BINARY_DIR}/map-end-to-end vineyard-002-4us)
+rowloc_script_test(map_end_to_end_rejects_an_unknown_scenario OFF "no scenario .*nowhere\\.json"
+  map-end-to-end --out ${CMAKE_CURRENT_BINARY_DIR}/map-end-to-end-bad nowhere)

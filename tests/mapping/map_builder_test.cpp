@@ -164,6 +164,46 @@ TEST(MapBuilderTest, RunMapBuildWritesEveryOutput) {
   EXPECT_EQ(result.stages.front().name, "read and tile");
   EXPECT_EQ(result.stages.back().name, "write");
   EXPECT_FALSE(std::filesystem::exists(dir / "out/canopy.bt"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/.rowloc-tiles"));  // the spilled tiles are gone
+}
+
+TEST(MapBuilderTest, EveryPartGetsALoftedMeshThatAgreesWithItsOutline) {
+  // The sloped field's boxes are 1.3 m tall (0.5-1.8 m above the ground): the four mesh levels
+  // (0.6-1.6 m) all see both faces; the mesh cut at h_ref = 1 m (between two levels) lies on the
+  // part's outline within the interpolation of two equal outlines, i.e. within a centimetre.
+  test::ScratchDir dir;
+  const test::SyntheticField field = SlopedField();
+  WritePointCloud(field.Cloud(), dir / "survey.pcd");
+  MapBuildRequest request;
+  request.survey_path = dir / "survey.pcd";
+  request.output_dir = dir / "out";
+  request.georeference = Georeference::Local(kOrigin);
+  const MapBuildResult result = RunMapBuild(request);
+  ASSERT_EQ(result.parts.size(), 4U);
+  std::size_t triangles = 0;
+  for (const PartReport& part : result.parts) {
+    EXPECT_EQ(part.mesh_levels, 4) << part.id;
+    ASSERT_TRUE(part.mesh_slice_max_m.has_value()) << part.id;
+    EXPECT_LT(*part.mesh_slice_max_m, 0.01) << part.id;
+    triangles += part.mesh_triangles;
+  }
+  EXPECT_EQ(result.meshes.triangles.size(), triangles);
+  EXPECT_FALSE(ValidateTriangleMesh(result.meshes).has_value());
+  // Heights are the terrain plus h: every vertex between 0.6 and 1.6 m above the sloped ground.
+  for (const auto& v : result.meshes.vertices_m) {
+    const double h = v.z() - field.Ground(v.x(), v.y());
+    EXPECT_GT(h, 0.6 - 0.03);
+    EXPECT_LT(h, 1.6 + 0.03);
+  }
+  // meshes.ply reads back (PCL) with every vertex.
+  const PointCloud back = ReadPointCloud(dir / "out/meshes.ply");
+  EXPECT_EQ(back.points_m.size(), result.meshes.vertices_m.size());
+  // No levels, no meshes (and a stale file is removed).
+  request.config.mesh.levels = 0;
+  const MapBuildResult without = RunMapBuild(request);
+  EXPECT_TRUE(without.meshes.triangles.empty());
+  EXPECT_FALSE(std::filesystem::exists(dir / "out/meshes.ply"));
+  EXPECT_EQ(without.parts.front().mesh_levels, 0);
 }
 
 TEST(MapBuilderTest, RunMapBuildWritesTheCanopyOctoMapOnRequest) {

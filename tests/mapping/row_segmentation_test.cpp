@@ -106,6 +106,22 @@ TEST(RowSegmentationTest, RowsFarApartCostTheirCellsNotTheirBoundingBox) {
   EXPECT_EQ(rows.rows[1].parts.front().points_m.size(), one_row);
 }
 
+TEST(RowSegmentationTest, PointsGoToThePartTheyLieNear) {
+  // Two rows 2.5 m apart; points of another height 10 cm beside each row's faces go to that row's
+  // part, points in the lane (1.25 m from both) to none.
+  const test::SyntheticField field = Field({{0, 6, 0.0, 0.25}, {0, 6, 2.5, 0.25}});
+  const RowDetection rows = DetectRows(Band(field), RowParams{});
+  ASSERT_EQ(rows.rows.size(), 2U);
+  const std::vector<Eigen::Vector2d> others = {{3.0, -0.35}, {3.0, 0.35}, {3.0, 2.15}, {3.0, 1.25}, {20.0, 0.0}};
+  const auto assigned = AssignPointsToParts(rows, others, 0.25);
+  ASSERT_EQ(assigned.size(), 2U);
+  const double y0 = rows.rows[0].parts[0].centroid_m.y();
+  const std::size_t near_first = y0 < 1.0 ? 0 : 1;  // rows are ordered across, in either direction
+  EXPECT_EQ(assigned[near_first].size(), 2U);
+  EXPECT_EQ(assigned[1 - near_first].size(), 1U);
+  EXPECT_THROW(AssignPointsToParts(rows, others, 0.0), std::invalid_argument);
+}
+
 TEST(RowSegmentationTest, CurvedRowsWithAGapAreFollowed) {
   // Three concentric arcs (radius 30, 32.5, 35 m, a quarter turn each) sampled on both faces and
   // the end caps; the middle one has a 1.2 m gap. Chords would cross the neighbouring rows.

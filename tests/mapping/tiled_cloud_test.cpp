@@ -102,7 +102,7 @@ TEST(TiledCloudTest, DiskTilesEqualMemoryTilesAndTheSpillDirectoryIsRemoved) {
   EXPECT_FALSE(std::filesystem::exists(spill));
 }
 
-TEST(TiledCloudTest, RefusesAnExistingDirectoryAndNonFinitePoints) {
+TEST(TiledCloudTest, RefusesAnExistingDirectoryNonFiniteAndFarPoints) {
   test::ScratchDir dir;
   EXPECT_THROW(TiledCloud(20.0, 3.0, dir.path()), std::system_error);
   EXPECT_TRUE(std::filesystem::exists(dir.path()));  // not removed: it was not ours
@@ -114,6 +114,12 @@ TEST(TiledCloudTest, RefusesAnExistingDirectoryAndNonFinitePoints) {
     EXPECT_THAT(e.what(), HasSubstr("point 2 is not finite"));
   }
   EXPECT_THROW(TiledCloud(0.0, 1.0), std::invalid_argument);
+  try {
+    cloud.Add({{1e300, 0.0, 0.0}});  // finite, but no survey in metres: a tile index would overflow
+    FAIL() << "a point at 1e300 m was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_THAT(e.what(), HasSubstr("beyond 10^9 m"));
+  }
 }
 
 TEST(TiledCloudTest, EmptyCloudHasNoTiles) {

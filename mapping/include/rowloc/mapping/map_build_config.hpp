@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rowloc::mapping {
 
@@ -67,6 +68,19 @@ struct OutlineParams {
   double simplify_tolerance_m = 0.01;   ///< CGAL Polyline_simplification_2 tolerance; 0: none
 };
 
+/// Steps 5-6, mesh route: outlines at `levels` heights from lowest_m to highest_m above the terrain
+/// lofted into one mesh per part (row_mesh.hpp), written to meshes.ply.
+struct MeshParams {
+  int levels = 4;                  ///< outline heights; 0: no meshes; else >= 2
+  double lowest_m = 0.6;           ///< height of the lowest outline above the terrain
+  double highest_m = 1.6;          ///< height of the highest outline (> lowest_m)
+  double vertex_spacing_m = 2.0;   ///< spacing of the rings' vertices along the outline
+};
+
+/// The outline heights of the mesh route: levels values from lowest_m to highest_m, equally spaced
+/// (none when levels is 0).
+std::vector<double> MeshLevelHeights(const MeshParams& mesh);
+
 struct MapBuildConfig {
   TileParams tiles;
   CleanParams clean;
@@ -74,6 +88,7 @@ struct MapBuildConfig {
   CanopyBandParams band;
   RowParams rows;
   OutlineParams outline;
+  MeshParams mesh;
 };
 
 /// A configuration file or value is invalid; what() names the file, the key and the reason.

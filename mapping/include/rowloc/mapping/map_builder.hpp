@@ -3,7 +3,8 @@
 //
 //   read in chunks into tiles (tiled_cloud.hpp) -> per tile: clean (cloud_cleaning.hpp), terrain
 //   (terrain_grid.hpp), normalize + band (tile_processing.hpp) -> rows (row_segmentation.hpp) ->
-//   outline per part (row_outline.hpp) -> simplify (polyline_simplification.hpp) -> write
+//   outline per part (row_outline.hpp) -> simplify (polyline_simplification.hpp) -> mesh per part
+//   (part_meshes.hpp) -> write
 //
 // Georeferencing. The cloud is either in local ENU metres around a stated WGS84 origin
 // (Georeference::Local), or in UTM metres of a zone (Georeference::Utm, "EPSG:326zz" north,
@@ -18,6 +19,8 @@
 //   dtm.json         the terrain grid, in the cloud's own coordinates;
 //   report.txt, report.json  rows and parts, points and time per stage, data reduction;
 //   map.svg          top view of the outlines over a sample of the cleaned cloud;
+//   meshes.ply       a lofted mesh per row part (part_meshes.hpp), map frame; not written without
+//                    mesh levels (MeshParams::levels 0) or parts;
 //   canopy.bt        optional (MapBuildRequest::octomap_resolution_m): an OctoMap of the cleaned
 //                    points more than terrain.ground_tolerance_m above the terrain, in the map's
 //                    ENU frame (z relative to the origin's altitude), for CanopyOccupancyMap.
@@ -29,6 +32,7 @@
 #include "rowloc/mapping/terrain_grid.hpp"
 #include "rowloc/mapping/tile_processing.hpp"
 #include "rowloc/mapping/tiled_cloud.hpp"
+#include "rowloc/mapping/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 
@@ -71,6 +75,9 @@ struct PartReport {
   std::size_t traced_vertices = 0; ///< before simplification
   std::size_t vertices = 0;        ///< in the map
   bool simplified = false;         ///< false: CGAL refused (not simple) or tolerance 0
+  int mesh_levels = 0;             ///< outlines lofted into its mesh (0: no mesh)
+  std::size_t mesh_triangles = 0;
+  std::optional<double> mesh_slice_max_m;  ///< its mesh cut at h_ref against its outline, largest distance
 };
 
 struct MapBuildResult {
@@ -92,6 +99,7 @@ struct MapBuildResult {
   std::vector<Eigen::Vector2d> cloud_sample_m;  ///< cleaned cloud sample in the map frame (SVG)
   std::vector<double> cloud_sample_height_m;    ///< their heights above the terrain
   PointCloud canopy_m;  ///< with keep_canopy: the cleaned points above the ground, map frame
+  TriangleMesh meshes;  ///< every part's mesh, map frame (z relative to the map origin's altitude for UTM)
   std::string message;                  ///< "7 rows (9 parts)" or "no rows found: ..."
 };
 

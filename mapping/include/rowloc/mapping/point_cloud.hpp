@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <stdexcept>
@@ -64,5 +65,13 @@ std::size_t ForEachPointChunk(const std::filesystem::path& path, std::size_t chu
 /// a device or directory). Throws PointCloudError on unknown extension, empty cloud, non-finite
 /// points (count in the message) or a write failure (e.g. missing directory, with the OS reason).
 void WritePointCloud(const PointCloud& cloud, const std::filesystem::path& path);
+
+/// Writes a triangle mesh (vertices and counter-clockwise index triples) as a binary PLY with
+/// float x, y, z (PCL's mesh writer takes no other; for a local frame: 1 mm up to 16 km from its
+/// origin) and a face list (PCL's PLY writer), atomically (a temporary renamed over the
+/// target). ReadPointCloud reads its vertices back. Throws PointCloudError for another extension,
+/// an empty mesh, a non-finite vertex, an index out of range, or a write failure.
+void WriteTriangleMeshPly(const std::vector<Eigen::Vector3d>& vertices_m,
+                          const std::vector<std::array<int, 3>>& triangles, const std::filesystem::path& path);
 
 }  // namespace rowloc::mapping

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <array>
 #include <vector>
 
 namespace rowloc::mapping {
@@ -22,5 +23,12 @@ struct SimplifiedPolygon {
 /// vertices is returned unchanged with simplified = false. Throws std::invalid_argument for a
 /// negative or non-finite tolerance or non-finite points.
 SimplifiedPolygon SimplifyPolygon(const std::vector<Eigen::Vector2d>& polygon_m, double tolerance_m);
+
+/// The triangles of a simple polygon (closed, first point not repeated), as indices into polygon_m,
+/// counter-clockwise: a constrained Delaunay triangulation of its edges (CGAL), the faces inside
+/// kept. Uses the polygon's vertices only (no new points), so it closes a mesh whose rim is the
+/// polygon. Empty if the polygon has fewer than 3 vertices or is not simple. Throws
+/// std::invalid_argument on a non-finite point.
+std::vector<std::array<int, 3>> TriangulatePolygon(const std::vector<Eigen::Vector2d>& polygon_m);
 
 }  // namespace rowloc::mapping

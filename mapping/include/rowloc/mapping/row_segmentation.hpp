@@ -70,4 +70,13 @@ struct RowDetection {
 /// 4 * 10^8 cells.
 RowDetection DetectRows(const std::vector<Eigen::Vector2d>& band_points_m, const RowParams& params);
 
+/// Other points (e.g. the band at another height) given to the parts they lie near: a point goes to
+/// the part that has a band point in its cell of edge radius_m or in one of the 8 neighbouring cells
+/// (so within 2 sqrt(2) radius_m of it; the first such part in row order where parts are that
+/// close), others are left out. One list per part, in the order of rows[r].parts[p] flattened.
+/// Throws std::invalid_argument unless radius_m > 0.
+std::vector<std::vector<Eigen::Vector2d>> AssignPointsToParts(const RowDetection& detection,
+                                                              const std::vector<Eigen::Vector2d>& points_m,
+                                                              double radius_m);
+
 }  // namespace rowloc::mapping

@@ -57,6 +57,7 @@ struct TileProducts {
   std::vector<Eigen::Vector2d> sample_m;       ///< every sample_stride-th cleaned core point (x, y)
   std::vector<double> sample_height_m;         ///< their heights above the terrain
   std::vector<Eigen::Vector3d> canopy_m;       ///< keep_canopy: cleaned core points above the ground tolerance
+  std::vector<std::vector<Eigen::Vector2d>> level_band_m;  ///< per mesh level (MeshLevelHeights): the core's band points, one per kLevelBandCellM cell
 };
 
 struct TileJob {
@@ -65,6 +66,9 @@ struct TileJob {
   bool keep_canopy = false;
   int threads = 1;               ///< threads of the outlier removal's k-NN queries
 };
+
+/// The mesh levels' band points are kept as one centroid per square cell of this edge.
+inline constexpr double kLevelBandCellM = 0.02;
 
 /// Points within this distance of a core are cleaned with it (they hold its points' nearest
 /// neighbours for the outlier statistic; the k-NN distances of a survey are centimetres).
@@ -112,6 +116,7 @@ struct SurveyProducts {
   std::vector<Eigen::Vector2d> sample_m;
   std::vector<double> sample_height_m;
   std::vector<Eigen::Vector3d> canopy_m;
+  std::vector<std::vector<Eigen::Vector2d>> level_band_m;  ///< per mesh level, as TileProducts
 };
 
 /// ProcessTile over every tile of `cloud` (whose points are `offset_m` + working frame), releasing

@@ -65,6 +65,10 @@ class TileLayout {
   Eigen::Vector2d anchor_m_;
 };
 
+/// Horizontal coordinates beyond this (metres from the origin) are refused: no survey in metres
+/// (UTM, local ENU) reaches them, and tile indices stay far from integer overflow.
+inline constexpr double kMaxHorizontalCoordinateM = 1e9;
+
 /// Points per tile buffered before a disk-backed TiledCloud appends them to the tile's file.
 inline constexpr std::size_t kSpillBufferPoints = 4096;
 
@@ -79,9 +83,8 @@ class TiledCloud {
   TiledCloud(const TiledCloud&) = delete;
   TiledCloud& operator=(const TiledCloud&) = delete;
 
-  /// Adds points (any number of calls). Throws
-  /// std::invalid_argument on a non-finite point and std::system_error if a spill file cannot be
-  /// written.
+  /// Adds points (any number of calls). Throws std::invalid_argument on a non-finite point or one
+  /// beyond kMaxHorizontalCoordinateM, and std::system_error if a spill file cannot be written.
   void Add(const std::vector<Eigen::Vector3d>& points_m);
 
   /// The spill directory (nullopt: in memory).
