@@ -48,6 +48,16 @@ geometry::RowMap TrueMap(const test::SyntheticField& field) {
   return map;
 }
 
+/// The field's cloud written to DIR/survey.pcd, and a request to build it into DIR/out.
+MapBuildRequest SurveyRequest(const test::SyntheticField& field, const test::ScratchDir& dir) {
+  WritePointCloud(field.Cloud(), dir / "survey.pcd");
+  MapBuildRequest request;
+  request.survey_path = dir / "survey.pcd";
+  request.output_dir = dir / "out";
+  request.georeference = Georeference::Local(kOrigin);
+  return request;
+}
+
 TEST(MapBuilderTest, RowsOverASlopedFieldMatchTheTruth) {
   const test::SyntheticField field = SlopedField();
   const MapBuildResult result = BuildRowMap(field.Cloud(), MapBuildConfig{}, Georeference::Local(kOrigin));
@@ -140,11 +150,7 @@ TEST(MapBuilderTest, GeoreferenceParsing) {
 
 TEST(MapBuilderTest, RunMapBuildWritesEveryOutput) {
   test::ScratchDir dir;
-  WritePointCloud(SlopedField().Cloud(), dir / "survey.pcd");
-  MapBuildRequest request;
-  request.survey_path = dir / "survey.pcd";
-  request.output_dir = dir / "out";
-  request.georeference = Georeference::Local(kOrigin);
+  MapBuildRequest request = SurveyRequest(SlopedField(), dir);
   const MapBuildResult result = RunMapBuild(request);
   ASSERT_TRUE(result.map.has_value());
   const geometry::RowMap back = mapio::ReadRowMapGeoJson(dir / "out/row-map.geojson");
@@ -173,11 +179,7 @@ TEST(MapBuilderTest, EveryPartGetsALoftedMeshThatAgreesWithItsOutline) {
   // part's outline within the interpolation of two equal outlines, i.e. within a centimetre.
   test::ScratchDir dir;
   const test::SyntheticField field = SlopedField();
-  WritePointCloud(field.Cloud(), dir / "survey.pcd");
-  MapBuildRequest request;
-  request.survey_path = dir / "survey.pcd";
-  request.output_dir = dir / "out";
-  request.georeference = Georeference::Local(kOrigin);
+  MapBuildRequest request = SurveyRequest(field, dir);
   const MapBuildResult result = RunMapBuild(request);
   ASSERT_EQ(result.parts.size(), 4U);
   std::size_t triangles = 0;
@@ -209,11 +211,7 @@ TEST(MapBuilderTest, EveryPartGetsALoftedMeshThatAgreesWithItsOutline) {
 TEST(MapBuilderTest, RunMapBuildWritesTheCanopyOctoMapOnRequest) {
   test::ScratchDir dir;
   const test::SyntheticField field = SlopedField();
-  WritePointCloud(field.Cloud(), dir / "survey.pcd");
-  MapBuildRequest request;
-  request.survey_path = dir / "survey.pcd";
-  request.output_dir = dir / "out";
-  request.georeference = Georeference::Local(kOrigin);
+  MapBuildRequest request = SurveyRequest(field, dir);
   request.octomap_resolution_m = 0.05;
   const MapBuildResult result = RunMapBuild(request);
   EXPECT_EQ(result.stages.back().name, "octomap: canopy.bt");
