@@ -6,13 +6,14 @@
 // statistical outlier removal with the tile's own statistics (mean and spread of the k-NN
 // distances over the tile: in a survey whose density changes across the field, each tile is
 // judged against its own density), the tile's DTM on the survey-wide DTM lattice, heights above it,
-// and then keeps only what lies in the core: the band points, the cleaned points' sample for the
-// SVG and, if asked, the canopy points. The overlap (>= terrain.classification_radius_m) gives the
+// and then keeps only what lies in the core: the band points (at h_ref and at each mesh level, these
+// thinned to one per kLevelBandCellM cell), the cleaned points' sample for the SVG and, if asked,
+// the canopy points. The overlap (>= terrain.classification_radius_m) gives the
 // core's cells the whole neighbourhood of their ground fit, so a core's products do not depend on
 // where the tile boundaries fall, up to the outlier statistics.
 //
 // ProcessTiles makes two passes over a TiledCloud, one tile at a time. Pass 1 (CleanTile) cleans
-// each core with only a kCleanMarginM margin (the outlier removal's k-NN queries, ~90 % of the
+// each core with only a kCleanMarginM margin (the outlier removal's k-NN queries, 60-70 % of the
 // time, run on tiles.threads threads; cleaning the whole 3 m overlap would cost 30 % more on 40 m
 // tiles) into a second tiled cloud; pass 2 (NormalizeTile) builds each tile's DTM from the cleaned
 // points of its core and overlap, and keeps the core's products. Products are merged in tile
@@ -22,9 +23,9 @@
 // covers it; cells of no tile are filled from their neighbours (FillFromNeighbours).
 //
 // Memory: one tile at a time, ~(24 + 80) bytes per point of the tile while it is processed (its
-// points, the voxel keys, PCL's float cloud and k-d tree), plus the merged
-// products: 16 bytes per band point, the DTM (9 bytes per cell), the SVG sample (<= 20,000 points)
-// and, with keep_canopy, 24 bytes per canopy point.
+// points, the voxel keys, the float copy and FLANN's k-d tree), plus the merged products: 16 bytes
+// per band point (h_ref and mesh levels), the DTM (9 bytes per cell), the SVG sample (<= 20,000
+// points) and, with keep_canopy, 24 bytes per canopy point.
 #pragma once
 
 #include "rowloc/mapping/map_build_config.hpp"
