@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -52,6 +53,26 @@ std::string BaseId(const std::string& id) {
 }
 
 }  // namespace
+
+double LargestDistanceToOutlines(const geometry::RowMap& from, const geometry::RowMap& to, double step_m) {
+  if (!(step_m > 0.0) || !std::isfinite(step_m)) {
+    throw std::invalid_argument("LargestDistanceToOutlines: step_m must be positive");
+  }
+  std::vector<geometry::SegmentIndex::Entry> segments;
+  for (std::size_t r = 0; r < to.rows.size(); ++r) {
+    for (std::size_t s = 0; s < to.rows[r].SegmentCount(); ++s) {
+      const auto [a, b] = to.rows[r].Segment(s);
+      if ((b - a).norm() > 1e-9) segments.push_back({geometry::Segment2{a, b}, r, s});
+    }
+  }
+  const std::vector<Sample> samples = SampleOutlines(from, step_m);
+  if (samples.empty()) return 0.0;
+  if (segments.empty()) return std::numeric_limits<double>::infinity();
+  const geometry::SegmentIndex index(std::move(segments));
+  double largest = 0.0;
+  for (const Sample& sample : samples) largest = std::max(largest, index.Nearest(sample.point, 1).front().first);
+  return largest;
+}
 
 MapComparison CompareRowMaps(const geometry::RowMap& built_in, const geometry::RowMap& truth,
                              const MapComparisonParams& params) {

@@ -1,7 +1,8 @@
 // A lofted mesh per row part, with its check against the map's outline (see part_meshes.hpp).
 #include "rowloc/mapping/part_meshes.hpp"
 
-#include "rowloc/geometry/segment_index.hpp"
+#include "rowloc/geometry/row_map.hpp"
+#include "rowloc/mapping/map_comparison.hpp"
 #include "rowloc/mapping/mesh_slicer.hpp"
 #include "rowloc/mapping/row_mesh.hpp"
 #include "rowloc/mapping/row_outline.hpp"
@@ -12,22 +13,6 @@
 #include <stdexcept>
 
 namespace rowloc::mapping {
-
-double LargestDistanceToPolygon(const std::vector<Eigen::Vector3d>& points_m,
-                                const std::vector<Eigen::Vector2d>& polygon_m) {
-  // The polygon's edges in the R-tree of rowloc::geometry (Boost.Geometry), degenerate ones left out.
-  std::vector<geometry::SegmentIndex::Entry> edges;
-  for (std::size_t i = 0; i < polygon_m.size(); ++i) {
-    const Eigen::Vector2d& a = polygon_m[i];
-    const Eigen::Vector2d& b = polygon_m[(i + 1) % polygon_m.size()];
-    if ((b - a).norm() > 1e-9) edges.push_back({geometry::Segment2{a, b}, 0, i});
-  }
-  if (edges.empty()) return points_m.empty() ? 0.0 : std::numeric_limits<double>::infinity();
-  const geometry::SegmentIndex index(std::move(edges));
-  double largest = 0.0;
-  for (const auto& point : points_m) largest = std::max(largest, index.Nearest(point.head<2>(), 1).front().first);
-  return largest;
-}
 
 std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
                                       std::vector<std::vector<Eigen::Vector2d>> level_band_m,
@@ -43,6 +28,8 @@ std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
   if (heights.empty()) return meshes;
   // One level at a time (memory: one level's points assigned to the parts), lowest first.
   std::vector<std::vector<OutlineAtHeight>> rings(part_count);
+  std::vector<double> reference_perimeter(part_count, 0.0);
+  for (std::size_t part = 0; part < part_count; ++part) reference_perimeter[part] = RingPerimeter(outlines_m[part]);
   for (std::size_t level = 0; level < heights.size(); ++level) {
     const std::vector<std::vector<Eigen::Vector2d>> by_part =
         AssignPointsToParts(detection, level_band_m[level], config.rows.link_radius_m);
@@ -52,7 +39,7 @@ std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
       const PartOutline outline = TraceOutline(by_part[part], config.outline);
       if (outline.polygon_m.size() < 3) continue;
       // The canopy is missing or thin at this height: a shorter outline would twist the loft.
-      if (RingPerimeter(outline.polygon_m) < 0.9 * RingPerimeter(outlines_m[part])) continue;
+      if (RingPerimeter(outline.polygon_m) < 0.9 * reference_perimeter[part]) continue;
       rings[part].push_back({heights[level], outline.polygon_m});
     }
   }
@@ -64,20 +51,17 @@ std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
     out.levels = static_cast<int>(rings[part].size());
     const double h_ref = config.band.reference_height_m;
     if (h_ref > rings[part].front().height_m && h_ref < rings[part].back().height_m) {
-      // The cut sampled every 1 cm along its edges (its vertices alone would miss the chords), against
-      // the part's traced outline (5 cm stations).
-      std::vector<Eigen::Vector3d> cut;
+      // The cut, sampled every 1 cm along its edges (its vertices alone would miss the chords),
+      // against the part's traced outline (5 cm stations).
+      geometry::RowMap cut;
       for (const Polyline3& piece : SliceMesh(*out.mesh, Eigen::Vector3d::UnitZ(), h_ref)) {
-        const std::size_t n = piece.points_m.size();
-        for (std::size_t i = 0; i < n && n >= 2; ++i) {
-          if (!piece.closed && i + 1 == n) break;
-          const Eigen::Vector3d& a = piece.points_m[i];
-          const Eigen::Vector3d& b = piece.points_m[(i + 1) % n];
-          const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.01)));
-          for (int s = 0; s < steps; ++s) cut.push_back(a + (b - a) * (static_cast<double>(s) / steps));
-        }
+        geometry::Row row{"cut", {}, piece.closed};
+        for (const auto& p : piece.points_m) row.points_m.push_back(p.head<2>());
+        if (row.points_m.size() >= 2) cut.rows.push_back(std::move(row));
       }
-      if (!cut.empty()) out.slice_max_m = LargestDistanceToPolygon(cut, outlines_m[part]);
+      geometry::RowMap outline;
+      outline.rows.push_back(geometry::Row{"outline", outlines_m[part], true});
+      if (!cut.rows.empty()) out.slice_max_m = LargestDistanceToOutlines(cut, outline, 0.01);
     }
   }
   return meshes;

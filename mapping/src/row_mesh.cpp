@@ -1,6 +1,7 @@
 // Lofting a part's outlines at several heights into a closed mesh (see row_mesh.hpp).
 #include "rowloc/mapping/row_mesh.hpp"
 
+#include "rowloc/geometry/row_map.hpp"
 #include "rowloc/mapping/polyline_simplification.hpp"
 
 #include <algorithm>
@@ -10,14 +11,9 @@
 namespace rowloc::mapping {
 namespace {
 
+/// > 0 for a counter-clockwise ring (geometry::OutlineSignedArea, Boost.Geometry).
 double SignedArea(const std::vector<Eigen::Vector2d>& ring) {
-  double area = 0.0;
-  for (std::size_t i = 0; i < ring.size(); ++i) {
-    const Eigen::Vector2d& a = ring[i];
-    const Eigen::Vector2d& b = ring[(i + 1) % ring.size()];
-    area += a.x() * b.y() - b.x() * a.y();
-  }
-  return 0.5 * area;
+  return geometry::OutlineSignedArea(geometry::Row{"", ring, true});
 }
 
 std::size_t NearestVertex(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vector2d& to) {

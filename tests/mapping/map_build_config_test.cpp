@@ -65,6 +65,23 @@ TEST(MapBuildConfigTest, TheTileOverlapMustCoverTheGroundFitsNeighbourhood) {
   EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("tiles.threads: must be in [0, 64]"));
 }
 
+TEST(MapBuildConfigTest, MeshLevelsAreNoneOrAtLeastTwoBetweenTheirHeights) {
+  MapBuildConfig config;
+  EXPECT_EQ(MeshLevelHeights(config.mesh).size(), 4U);
+  EXPECT_DOUBLE_EQ(MeshLevelHeights(config.mesh).front(), 0.6);
+  EXPECT_DOUBLE_EQ(MeshLevelHeights(config.mesh).back(), 1.6);
+  config.mesh.levels = 0;
+  EXPECT_TRUE(MeshLevelHeights(config.mesh).empty());
+  EXPECT_FALSE(ValidateMapBuildConfig(config).has_value());
+  config.mesh.levels = 1;
+  EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("mesh.levels: must be 0 (no meshes) or at least 2"));
+  config.mesh.levels = 3;
+  config.mesh.highest_m = 0.6;  // = lowest_m
+  EXPECT_THAT(ValidateMapBuildConfig(config).value_or(""), HasSubstr("mesh.highest_m: must be above mesh.lowest_m"));
+  config.mesh.highest_m = 1.0;
+  EXPECT_EQ(MeshLevelHeights(config.mesh), (std::vector<double>{0.6, 0.8, 1.0}));
+}
+
 TEST_F(MapBuildConfigFileTest, FormatThenLoadRoundTrips) {
   MapBuildConfig config;
   config.band.reference_height_m = 1.25;

@@ -46,6 +46,22 @@ TEST(MapComparisonTest, AShiftAcrossTheRowsIsMeasured) {
   EXPECT_NEAR(c.max_m, 0.01, 1e-9);
 }
 
+TEST(MapComparisonTest, LargestDistanceToOutlinesIsTheDirectedHausdorffDistance) {
+  // A box 3 cm wider on one side: its far face is 3 cm from the truth's outline, the rest on it.
+  const auto truth = Map({Box("a", 0, 10, 0)});
+  const auto wider = Map({geometry::Row{"b", {{0, -0.25}, {10, -0.25}, {10, 0.28}, {0, 0.28}}, true}});
+  EXPECT_NEAR(LargestDistanceToOutlines(wider, truth, 0.01), 0.03, 1e-9);
+  EXPECT_NEAR(LargestDistanceToOutlines(truth, truth, 0.01), 0.0, 1e-12);
+  // An open cut (a polyline) is sampled to its last point; a repeated vertex in `to` is harmless.
+  const auto open = Map({geometry::Row{"c", {{0, 0.35}, {10, 0.35}}, false}});
+  EXPECT_NEAR(LargestDistanceToOutlines(open, truth, 0.01), 0.10, 1e-9);
+  const auto repeated = Map({geometry::Row{"d", {{0, -0.25}, {10, -0.25}, {10, -0.25}, {10, 0.25}, {0, 0.25}}, true}});
+  EXPECT_NEAR(LargestDistanceToOutlines(truth, repeated, 0.01), 0.0, 1e-12);
+  EXPECT_EQ(LargestDistanceToOutlines(Map({}), truth, 0.01), 0.0);
+  EXPECT_TRUE(std::isinf(LargestDistanceToOutlines(truth, Map({}), 0.01)));
+  EXPECT_THROW(LargestDistanceToOutlines(truth, truth, 0.0), std::invalid_argument);
+}
+
 TEST(MapComparisonTest, MissedAndInventedRowsAreNamed) {
   const auto truth = Map({Box("row-1", 0, 10, 0), Box("row-2", 0, 10, 2.5)});
   const auto built = Map({Box("row-1", 0, 10, 0), Box("row-9", 0, 10, 6.0)});

@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -245,6 +246,30 @@ TEST(WritePointCloud, RejectsBadInput) {
     EXPECT_THAT(e.what(), HasSubstr("1 of 3 points have non-finite"));
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "nan.pcd"));
+}
+
+TEST(WriteTriangleMeshPly, WritesAMeshThatReadsBackAndRefusesBadMeshes) {
+  test::ScratchDir dir;
+  const std::vector<Eigen::Vector3d> vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::vector<std::array<int, 3>> triangles = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  WriteTriangleMeshPly(vertices, triangles, dir / "tetra.ply");
+  EXPECT_EQ(ReadPointCloud(dir / "tetra.ply").points_m, vertices);  // exact: small coordinates in float
+  const auto refused = [&](const std::vector<Eigen::Vector3d>& v, const std::vector<std::array<int, 3>>& t,
+                           const std::string& name, const std::string& reason) {
+    try {
+      WriteTriangleMeshPly(v, t, dir / name);
+      ADD_FAILURE() << "accepted: " << reason;
+    } catch (const PointCloudError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(reason));
+      EXPECT_FALSE(std::filesystem::exists(dir / name)) << name;
+    }
+  };
+  refused(vertices, triangles, "tetra.pcd", "a mesh is written as .ply only");
+  refused({}, triangles, "empty.ply", "refusing to write an empty mesh");
+  refused(vertices, {}, "empty.ply", "refusing to write an empty mesh");
+  refused(vertices, {{0, 1, 4}}, "bad.ply", "a triangle refers to vertex 4 of 4");
+  refused(vertices, {{0, -1, 2}}, "bad.ply", "a triangle refers to vertex -1 of 4");
+  refused({{0, 0, 0}, {1, 0, std::nan("")}, {0, 1, 0}}, {{0, 1, 2}}, "nan.ply", "non-finite");
 }
 
 }  // namespace

@@ -88,6 +88,18 @@ TEST(TerrainGridTest, UndulatingGroundIsFollowed) {
   }
 }
 
+TEST(TerrainGridTest, FillFromNeighboursSpreadsTheFilledCellsAndRefusesBadGrids) {
+  // A 3 x 1 grid with only its left cell filled: the fill reaches the right end in two passes.
+  std::vector<double> heights = {2.0, 0.0, 0.0};
+  std::vector<bool> filled = {true, false, false};
+  FillFromNeighbours(heights, filled, 3, 1);
+  EXPECT_EQ(heights, (std::vector<double>{2.0, 2.0, 2.0}));
+  EXPECT_EQ(filled, (std::vector<bool>{true, true, true}));
+  std::vector<bool> none = {false, false, false};
+  EXPECT_THROW(FillFromNeighbours(heights, none, 3, 1), std::invalid_argument);
+  EXPECT_THROW(FillFromNeighbours(heights, filled, 2, 2), std::invalid_argument);
+}
+
 TEST(TerrainGridTest, EmptyCloudAndBadParametersThrow) {
   EXPECT_THROW(BuildTerrainGrid(PointCloud{}, TerrainParams{}), std::invalid_argument);
   PointCloud one;

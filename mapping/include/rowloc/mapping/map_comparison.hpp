@@ -57,6 +57,12 @@ MapComparison CompareRowMaps(const geometry::RowMap& built, const geometry::RowM
                              const MapComparisonParams& params = {});
 
 /// Plain-text summary (several lines) and JSON text of a comparison.
+/// The largest distance of `from`'s outlines, sampled every step_m as CompareRowMaps samples them,
+/// to the nearest segment of `to` (the directed Hausdorff distance; both maps in one frame, their
+/// origins ignored). Segments of `to` shorter than 1 nm are left out. 0 when `from` has no
+/// segments; infinity when `to` has none. Throws std::invalid_argument unless step_m > 0.
+double LargestDistanceToOutlines(const geometry::RowMap& from, const geometry::RowMap& to, double step_m);
+
 std::string FormatMapComparison(const MapComparison& comparison);
 std::string FormatMapComparisonJson(const MapComparison& comparison);
 

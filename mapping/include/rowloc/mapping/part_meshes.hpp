@@ -6,7 +6,8 @@
 // h_ref (a level where the canopy is missing or thin gives a shorter or no outline: left out) are
 // lofted (LoftRings) into a mesh in (x, y, h), h = height above the terrain. Each mesh is then cut
 // at h_ref by CGAL's Polygon_mesh_slicer (SliceMesh) and the cut compared with the part's outline
-// traced at h_ref: the largest distance is reported (a check that the mesh and the map agree).
+// traced at h_ref (LargestDistanceToOutlines, map_comparison.hpp): the largest distance is reported
+// (a check that the mesh and the map agree).
 #pragma once
 
 #include "rowloc/mapping/map_build_config.hpp"
@@ -34,9 +35,5 @@ std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
                                       std::vector<std::vector<Eigen::Vector2d>> level_band_m,
                                       const std::vector<std::vector<Eigen::Vector2d>>& outlines_m,
                                       const MapBuildConfig& config);
-
-/// The largest distance of the points to the closed polygon's edges (0 for no points).
-double LargestDistanceToPolygon(const std::vector<Eigen::Vector3d>& points_m,
-                                const std::vector<Eigen::Vector2d>& polygon_m);
 
 }  // namespace rowloc::mapping
