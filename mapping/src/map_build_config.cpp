@@ -63,6 +63,8 @@ const std::vector<Field>& Fields() {
       ROWLOC_NUMBER("outline", outline.end_exclusion_m, "end_exclusion_m", 0.0, 5.0),
       ROWLOC_NUMBER("outline", outline.min_width_m, "min_width_m", 0.0, 10.0),
       ROWLOC_NUMBER("outline", outline.simplify_tolerance_m, "simplify_tolerance_m", 0.0, 10.0),
+      ROWLOC_NUMBER("outline", outline.one_sided_max_width_m, "one_sided_max_width_m", 0.0, 10.0),
+      ROWLOC_NUMBER("outline", outline.one_sided_window_m, "one_sided_window_m", 0.1, 20.0),
       ROWLOC_INTEGER("mesh", mesh.levels, "levels", 0, 20),
       ROWLOC_NUMBER("mesh", mesh.lowest_m, "lowest_m", 0.0, 20.0),
       ROWLOC_NUMBER("mesh", mesh.highest_m, "highest_m", 0.0, 20.0),
@@ -123,18 +125,14 @@ MapBuildConfig LoadMapBuildConfig(const std::filesystem::path& path) {
   const std::string text = mapio::detail::ReadTextFile<MapBuildConfigError>(path, "map build configuration");
   const nlohmann::json root = mapio::detail::ParseJsonText<MapBuildConfigError>(text, source);
   Reader reader(root, source, "");
+  // An overlay on the code's defaults: a section or key left out keeps its default; a misspelt
+  // one is rejected as unknown.
   MapBuildConfig config;
-  std::vector<std::string> sections(Sections().begin(), Sections().end());
-  reader.ExpectKeys(sections);  // a misspelt key is reported as unknown, not its spelling as missing
   for (const char* section : Sections()) {
+    if (!reader.Has(section)) continue;
     Reader part = reader.Object(section);
-    std::vector<std::string> keys;
     for (const Field& f : Fields()) {
-      if (std::string_view(f.section) == section) keys.emplace_back(f.key);
-    }
-    part.ExpectKeys(keys);
-    for (const Field& f : Fields()) {
-      if (std::string_view(f.section) != section) continue;
+      if (std::string_view(f.section) != section || !part.Has(f.key)) continue;
       if (f.integer) {
         *f.whole(config) = static_cast<int>(part.Integer(f.key, static_cast<std::int64_t>(f.low),
                                                          static_cast<std::int64_t>(f.high)));

@@ -13,6 +13,8 @@
 #include "rowloc/mapping/tiled_cloud.hpp"
 
 #include <GeographicLib/UTMUPS.hpp>
+#include <boost/geometry.hpp>
+#include <boost/geometry/index/rtree.hpp>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +23,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -29,6 +32,9 @@
 
 namespace rowloc::mapping {
 namespace {
+
+namespace bg = boost::geometry;
+namespace bgi = boost::geometry::index;
 
 using Clock = std::chrono::steady_clock;
 
@@ -39,6 +45,39 @@ double SecondsSince(Clock::time_point start) {
 void WriteText(const std::filesystem::path& path, const std::string& text) { mapio::WriteFileAtomically(path, text); }
 
 double Round(double value, double unit) { return std::round(value / unit) * unit; }
+
+/// The canopy top's cells (SurveyProducts::top_m) in an R-tree, for the parts seen from one side.
+class TopCells {
+ public:
+  explicit TopCells(const std::vector<Eigen::Vector2d>& top_m) : top_m_(top_m) {}
+
+  /// The cells within margin_m of the bounding box of `points_m` (built on first use).
+  std::vector<Eigen::Vector2d> Near(const std::vector<Eigen::Vector2d>& points_m, double margin_m) {
+    if (top_m_.empty() || points_m.empty()) return {};
+    if (!tree_) {
+      std::vector<std::pair<BoostPoint, std::size_t>> entries;
+      entries.reserve(top_m_.size());
+      for (std::size_t i = 0; i < top_m_.size(); ++i) entries.emplace_back(BoostPoint(top_m_[i].x(), top_m_[i].y()), i);
+      tree_.emplace(entries.begin(), entries.end());  // packing construction
+    }
+    Eigen::Vector2d lo = points_m.front();
+    Eigen::Vector2d hi = lo;
+    for (const auto& p : points_m) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const bg::model::box<BoostPoint> box(BoostPoint(lo.x() - margin_m, lo.y() - margin_m),
+                                         BoostPoint(hi.x() + margin_m, hi.y() + margin_m));
+    std::vector<Eigen::Vector2d> out;
+    for (auto it = tree_->qbegin(bgi::intersects(box)); it != tree_->qend(); ++it) out.push_back(top_m_[it->second]);
+    return out;
+  }
+
+ private:
+  using BoostPoint = bg::model::point<double, 2, bg::cs::cartesian>;
+  const std::vector<Eigen::Vector2d>& top_m_;
+  std::optional<bgi::rtree<std::pair<BoostPoint, std::size_t>, bgi::rstar<16>>> tree_;
+};
 
 /// Drops vertices closer than 1e-6 m to their predecessor (the GeoJSON writer refuses them).
 std::vector<Eigen::Vector2d> DropRepeated(const std::vector<Eigen::Vector2d>& polygon) {
@@ -188,11 +227,17 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
   std::size_t row_number = 0;
   std::vector<std::vector<Eigen::Vector2d>> traced_outlines;  // per part (flattened), for the meshes
   std::vector<int> part_report;                               // per part: its index in result.parts, or -1
+  TopCells top(survey.top_m);
   for (const DetectedRow& row : detection.rows) {
     std::vector<std::pair<PartReport, std::vector<Eigen::Vector2d>>> outlines;
     for (const RowPart& part : row.parts) {
       start = Clock::now();
-      const PartOutline outline = TraceOutline(part.points_m, config.outline);
+      PartOutline outline = TraceOutline(part.points_m, config.outline);
+      if (outline.polygon_m.size() < 3 && outline.median_width_m < config.outline.min_width_m) {
+        // One face only: the hidden one from the canopy top, if the route is on and the top seen.
+        outline = TraceOneSidedOutline(part.points_m, top.Near(part.points_m, config.outline.one_sided_max_width_m),
+                                       config.outline);
+      }
       outline_seconds += SecondsSince(start);
       traced_outlines.push_back(outline.polygon_m);
       part_report.push_back(-1);
@@ -209,6 +254,9 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
       report.length_m = outline.length_m;
       report.traced_vertices = outline.polygon_m.size();
       report.simplified = simple.simplified;
+      report.one_sided = outline.one_sided;
+      report.width_m = outline.median_width_m;
+      report.width_spread_m = outline.width_spread_m;
       std::vector<Eigen::Vector2d> polygon;
       for (const auto& p : simple.points_m) polygon.push_back(to_map(p));
       polygon = DropRepeated(polygon);
@@ -229,6 +277,7 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
       report.id = outlines.size() == 1 ? fmt::format("row-{}", row_number)
                                        : fmt::format("row-{}.part-{}", row_number, k + 1);
       map.rows.push_back(geometry::Row{report.id, std::move(polygon), true});
+      result.one_sided_parts += report.one_sided ? 1 : 0;
       result.parts.push_back(report);
     }
   }
@@ -268,17 +317,25 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
     if (result.outlines_failed > 0) {
       result.message += fmt::format(
           "; {} parts narrower than outline.min_width_m ({} m): single canopy faces, as a scan from one side of "
-          "each row gives; a row's width cannot be measured from one face, so these rows are not mapped (survey "
-          "both sides of every row)",
+          "each row gives, without enough of the canopy top above them to measure their width from (or with "
+          "outline.one_sided_max_width_m 0); a row's width cannot be measured from one face, so these rows are not "
+          "mapped (survey both sides of every row, or its top)",
           result.outlines_failed, config.outline.min_width_m);
     }
   } else {
     result.message = fmt::format("{} rows ({} parts, {} vertices)", result.rows, map.rows.size(), map_vertices);
     if (result.outlines_failed > 0) {
       result.message += fmt::format(
-          "; {} parts without an outline (narrower than outline.min_width_m: single canopy faces, from a scan of "
-          "one side of the rows, or from a survey sparser than rows.link_radius_m allows)",
+          "; {} parts without an outline (narrower than outline.min_width_m: single canopy faces without enough "
+          "of the canopy top above them, from a scan of one side of the rows, or from a survey sparser than "
+          "rows.link_radius_m allows)",
           result.outlines_failed);
+    }
+    if (result.one_sided_parts > 0) {
+      result.message += fmt::format(
+          "; {} parts seen from one side only: their hidden face placed at the edge of the canopy top's "
+          "footprint, which assumes vertical canopy walls (see each part's width spread)",
+          result.one_sided_parts);
     }
     result.map = std::move(map);
   }
@@ -404,13 +461,16 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
   for (const auto& p : result.parts) {
     nlohmann::ordered_json part = {{"id", p.id}, {"points", p.points}, {"length_m", Round(p.length_m, 0.001)},
                                    {"traced_vertices", p.traced_vertices}, {"vertices", p.vertices},
-                                   {"simplified", p.simplified}, {"mesh_levels", p.mesh_levels},
+                                   {"simplified", p.simplified}, {"one_sided", p.one_sided},
+                                   {"width_m", Round(p.width_m, 1e-4)},
+                                   {"width_spread_m", Round(p.width_spread_m, 1e-4)}, {"mesh_levels", p.mesh_levels},
                                    {"mesh_triangles", p.mesh_triangles}};
     part["mesh_slice_max_m"] = p.mesh_slice_max_m ? nlohmann::ordered_json(Round(*p.mesh_slice_max_m, 1e-4)) : nullptr;
     parts.push_back(std::move(part));
   }
   report["row_parts"] = std::move(parts);
   report["outlines_failed"] = result.outlines_failed;
+  report["one_sided_parts"] = result.one_sided_parts;
   WriteText(request.output_dir / "report.json", report.dump(2) + "\n");
 
   std::string text = fmt::format("rowloc map build\n  survey: {} ({} points, {} bytes)\n  georeference: {}\n  config: {}\n"
@@ -426,11 +486,16 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
                       request.config.tiles.size_m, request.config.tiles.overlap_m, result.tile_threads,
                       result.largest_tile_points);
   if (!result.parts.empty()) {
-    text += "  part                 points  length [m]  traced  vertices  simplified  mesh: levels triangles slice-max [m]\n";
+    text += "  part                 points  length [m]  width [m]  traced  vertices  simplified  mesh: levels triangles "
+            "slice-max [m]\n";
     for (const auto& p : result.parts) {
-      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>6}  {:>8}  {:<10}  {:>12} {:>9} {:>13}\n", p.id, p.points,
-                          p.length_m, p.traced_vertices, p.vertices, p.simplified ? "yes" : "no", p.mesh_levels,
+      const std::string width = p.one_sided ? fmt::format("{:.3f}*", p.width_m) : fmt::format("{:.3f} ", p.width_m);
+      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>9}  {:>6}  {:>8}  {:<10}  {:>12} {:>9} {:>13}\n", p.id, p.points,
+                          p.length_m, width, p.traced_vertices, p.vertices, p.simplified ? "yes" : "no", p.mesh_levels,
                           p.mesh_triangles, p.mesh_slice_max_m ? fmt::format("{:.4f}", *p.mesh_slice_max_m) : "-");
+    }
+    if (result.one_sided_parts > 0) {
+      text += "  * seen from one side: the width from the canopy top's footprint (vertical walls assumed)\n";
     }
     text += fmt::format("\n  map: {} ({} bytes); data reduction {:.0f} : 1\n", map_path.string(), map_bytes,
                         report["data_reduction"].get<double>());

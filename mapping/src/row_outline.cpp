@@ -120,18 +120,48 @@ class CentreLine {
   std::vector<Eigen::Vector2d> normal_;
 };
 
-}  // namespace
+/// A part's centre line (step 1): the principal axis, the line, and its vertices' positions along
+/// the axis (monotone: the projection's segment hint relies on it).
+struct FittedLine {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  Eigen::Vector2d axis = Eigen::Vector2d::UnitX();
+  CentreLine centre;
+  std::vector<double> vertex_t;
 
-PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const OutlineParams& params) {
-  if (!(params.centreline_bin_m > 0.0) || !(params.station_step_m > 0.0) ||
-      !(params.edge_quantile >= 0.0 && params.edge_quantile <= 1.0) || !(params.end_exclusion_m >= 0.0) ||
-      !(params.min_width_m >= 0.0)) {
-    throw std::invalid_argument("TraceOutline: parameter outside its domain");
+  FittedLine(const Eigen::Vector2d& c_in, const Eigen::Vector2d& axis_in, std::vector<Eigen::Vector2d> line)
+      : c(c_in), axis(axis_in), centre(std::move(line)) {
+    for (const auto& p : centre.points()) vertex_t.push_back(axis.dot(p - c));
   }
-  PartOutline outline;
-  if (points_m.size() < 3) return outline;
 
-  // 1. Principal axis and the centre line from bin means along it.
+  /// Station and signed lateral offset of every point.
+  std::vector<std::pair<double, double>> ProjectAll(const std::vector<Eigen::Vector2d>& points_m) const {
+    const std::size_t segments = centre.points().size() - 1;
+    std::vector<std::pair<double, double>> se(points_m.size());
+    for (std::size_t k = 0; k < points_m.size(); ++k) {
+      const double t = axis.dot(points_m[k] - c);
+      const auto it = std::upper_bound(vertex_t.begin(), vertex_t.end(), t);
+      const std::size_t hint = std::min(
+          segments - 1, static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - vertex_t.begin()) - 1)));
+      se[k] = centre.Project(points_m[k], hint, 3);
+    }
+    return se;
+  }
+};
+
+/// Extends both ends of a line along their last segment so that every point projects inside it.
+std::vector<Eigen::Vector2d> Extended(const std::vector<Eigen::Vector2d>& v, double margin) {
+  std::vector<Eigen::Vector2d> line;
+  line.push_back(v.front() - margin * (v[1] - v[0]).normalized());
+  line.insert(line.end(), v.begin(), v.end());
+  line.push_back(v.back() + margin * (v.back() - v[v.size() - 2]).normalized());
+  return line;
+}
+
+/// Step 1: the centre line of >= 3 points, from bin means along their principal axis; if
+/// `between_faces`, then re-centred twice between the median left and right offsets per bin (the
+/// first pass is biased where the part's ends are oblique to its axis: one face reaches further
+/// than the other).
+FittedLine FitCentreLine(const std::vector<Eigen::Vector2d>& points_m, double bin_m, bool between_faces) {
   Eigen::Vector2d c = Eigen::Vector2d::Zero();
   for (const auto& p : points_m) c += p;
   c /= static_cast<double>(points_m.size());
@@ -148,16 +178,14 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
     t_lo = std::min(t_lo, t);
     t_hi = std::max(t_hi, t);
   }
-  const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil((t_hi - t_lo) / params.centreline_bin_m)));
+  const auto bins = static_cast<std::size_t>(std::max(1.0, std::ceil((t_hi - t_lo) / bin_m)));
   const double bin = std::max((t_hi - t_lo) / static_cast<double>(bins), 1e-9);
   std::vector<Eigen::Vector2d> sum(bins, Eigen::Vector2d::Zero());
   std::vector<std::size_t> count(bins, 0);
-  const auto bin_of = [&](double t) {
-    return std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, (t - t_lo) / bin)));
-  };
   for (const auto& p : points_m) {
-    const std::size_t b = bin_of(axis.dot(p - c));
-    sum[b] += Eigen::Vector2d(axis.dot(p - c), across.dot(p - c));
+    const double t = axis.dot(p - c);
+    const std::size_t b = std::min(bins - 1, static_cast<std::size_t>(std::max(0.0, (t - t_lo) / bin)));
+    sum[b] += Eigen::Vector2d(t, across.dot(p - c));
     ++count[b];
   }
   std::vector<Eigen::Vector2d> means;  // (t, u)
@@ -175,44 +203,17 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
   } else {
     for (const auto& tu : smoothed) vertices.push_back(to_xy(tu));
   }
-  // Extends both ends along their last segment so that every point projects inside the line.
-  const auto extended = [margin = bin + 1.0](const std::vector<Eigen::Vector2d>& v) {
-    std::vector<Eigen::Vector2d> line;
-    line.push_back(v.front() - margin * (v[1] - v[0]).normalized());
-    line.insert(line.end(), v.begin(), v.end());
-    line.push_back(v.back() + margin * (v.back() - v[v.size() - 2]).normalized());
-    return line;
-  };
-  // Projects every point (segment hint from its nearest vertex along the axis, which is monotone).
-  std::vector<double> vertex_t;
-  const auto project_all = [&](const CentreLine& centre, std::vector<std::pair<double, double>>& se) {
-    vertex_t.clear();
-    for (const auto& p : centre.points()) vertex_t.push_back(axis.dot(p - c));
-    const std::size_t segments = centre.points().size() - 1;
-    se.resize(points_m.size());
-    for (std::size_t k = 0; k < points_m.size(); ++k) {
-      const double t = axis.dot(points_m[k] - c);
-      const auto it = std::upper_bound(vertex_t.begin(), vertex_t.end(), t);
-      const std::size_t hint = std::min(segments - 1, static_cast<std::size_t>(std::max<std::ptrdiff_t>(
-                                                          0, (it - vertex_t.begin()) - 1)));
-      se[k] = centre.Project(points_m[k], hint, 3);
-    }
-  };
-
-  // 1b. Refinement: the centre line of the first pass is biased where the part's ends are oblique
-  // to its axis (one face reaches further along the axis than the other). Re-centre it between the
-  // median left and right offsets per station bin, twice.
-  std::vector<std::pair<double, double>> se;
-  for (int pass = 0; pass < 2 && vertices.size() >= 2; ++pass) {
-    const CentreLine centre(extended(vertices));
-    project_all(centre, se);
+  const double margin = bin + 1.0;
+  for (int pass = 0; between_faces && pass < 2 && vertices.size() >= 2; ++pass) {
+    const FittedLine fit(c, axis, Extended(vertices, margin));
+    const auto se = fit.ProjectAll(points_m);
     double s_min = std::numeric_limits<double>::infinity();
     double s_max = -s_min;
     for (const auto& [s, e] : se) {
       s_min = std::min(s_min, s);
       s_max = std::max(s_max, s);
     }
-    const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil((s_max - s_min) / params.centreline_bin_m)));
+    const auto n = static_cast<std::size_t>(std::max(1.0, std::ceil((s_max - s_min) / bin_m)));
     const double width = std::max((s_max - s_min) / static_cast<double>(n), 1e-9);
     std::vector<std::vector<double>> lefts(n);
     std::vector<std::vector<double>> rights(n);
@@ -227,11 +228,10 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
       if (lefts[k].empty() || rights[k].empty()) continue;
       const double s_mean = s_sum[k] / static_cast<double>(lefts[k].size() + rights[k].size());
       const double shift = 0.5 * (Quantile(lefts[k], 0.5) - Quantile(rights[k], 0.5));
-      const auto [position, normal] = centre.At(s_mean);
+      const auto [position, normal] = fit.centre.At(s_mean);
       refined.push_back(position + shift * normal);
     }
     if (refined.size() < 2) break;
-    // Keep the line monotone along the axis (the projection hint relies on it).
     std::vector<Eigen::Vector2d> monotone;
     for (const auto& p : refined) {
       if (monotone.empty() || axis.dot(p - monotone.back()) > 1e-6) monotone.push_back(p);
@@ -243,87 +243,251 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
     }
     vertices = std::move(smooth);
   }
-  const std::vector<Eigen::Vector2d> line = extended(vertices);
-  const CentreLine centre(line);
-  outline.centreline_m = line;
+  return FittedLine(c, axis, Extended(vertices, margin));
+}
 
-  // 2. Station and offset of every point. The part spans from its third lowest to its third highest
-  //    station: up to two stray points beyond an end (an outlier the cleaning kept, within
-  //    rows.link_radius_m of the row) are left out instead of moving the end cap out to them.
-  project_all(centre, se);
-  std::vector<double> stations_sorted;
-  stations_sorted.reserve(se.size());
-  for (const auto& [s, e] : se) stations_sorted.push_back(s);
-  std::sort(stations_sorted.begin(), stations_sorted.end());
-  const std::size_t strays = std::min<std::size_t>(2, (stations_sorted.size() - 1) / 2);
-  const double s_lo = stations_sorted[strays];
-  const double s_hi = stations_sorted[stations_sorted.size() - 1 - strays];
+/// Step 2's station range: from the third lowest to the third highest station. Up to two stray
+/// points beyond an end (an outlier the cleaning kept, within rows.link_radius_m of the row) are
+/// left out instead of moving the end cap out to them; `se` loses them.
+std::pair<double, double> TrimStrays(std::vector<std::pair<double, double>>& se) {
+  std::vector<double> stations;
+  stations.reserve(se.size());
+  for (const auto& [s, e] : se) stations.push_back(s);
+  std::sort(stations.begin(), stations.end());
+  const std::size_t strays = std::min<std::size_t>(2, (stations.size() - 1) / 2);
+  const double s_lo = stations[strays];
+  const double s_hi = stations[stations.size() - 1 - strays];
   std::erase_if(se, [&](const std::pair<double, double>& p) { return p.first < s_lo || p.first > s_hi; });
+  return {s_lo, s_hi};
+}
+
+/// The station bins of step 3 over [s_lo, s_hi].
+struct StationBins {
+  double s_lo = 0.0;
+  std::size_t count = 1;
+  double step = 1.0;
+
+  StationBins(double lo, double hi, double step_m)
+      : s_lo(lo),
+        count(static_cast<std::size_t>(std::max(1.0, std::round((hi - lo) / step_m)))),
+        step(std::max((hi - lo) / static_cast<double>(count), 1e-9)) {}
+
+  std::size_t Of(double s) const {
+    return std::min(count - 1, static_cast<std::size_t>(std::max(0.0, (s - s_lo) / step)));
+  }
+  double Centre(std::size_t k) const { return s_lo + (static_cast<double>(k) + 0.5) * step; }
+};
+
+/// Step 4: the polygon, right edge forward and left edge backward, closed by caps at cap_lo and
+/// cap_hi (edges: magnitudes of the offsets per station bin).
+std::vector<Eigen::Vector2d> AssemblePolygon(const CentreLine& centre, const StationBins& bins, double cap_lo,
+                                             double cap_hi, const std::vector<double>& left_edge,
+                                             const std::vector<double>& right_edge) {
+  std::vector<double> at;          // stations of the vertices
+  std::vector<std::size_t> which;  // their station bins
+  at.push_back(cap_lo);
+  which.push_back(0);
+  for (std::size_t k = 0; k < bins.count; ++k) {
+    const double s = bins.Centre(k);
+    if (s <= cap_lo || s >= cap_hi) continue;
+    at.push_back(s);
+    which.push_back(k);
+  }
+  at.push_back(cap_hi);
+  which.push_back(bins.count - 1);
+  std::vector<Eigen::Vector2d> polygon;
+  for (std::size_t v = 0; v < at.size(); ++v) {
+    const auto [position, normal] = centre.At(at[v]);
+    polygon.push_back(position - right_edge[which[v]] * normal);
+  }
+  for (std::size_t v = at.size(); v-- > 0;) {
+    const auto [position, normal] = centre.At(at[v]);
+    polygon.push_back(position + left_edge[which[v]] * normal);
+  }
+  return polygon;
+}
+
+/// The end caps' stations: per end, the median station of the points within end_exclusion_m of
+/// it and well inside the edges (at most half-way from the middle of the outline to its nearer
+/// edge: the cap samples); the extreme station is biased outward by the noise. Without three such
+/// points (no cap sampled), the extreme station.
+std::pair<double, double> CapStations(const std::vector<std::pair<double, double>>& se, double s_lo, double s_hi,
+                                      double end_exclusion_m, const std::vector<double>& left_edge,
+                                      const std::vector<double>& right_edge) {
+  const auto cap = [&](bool low) {
+    const double left = low ? left_edge.front() : left_edge.back();
+    const double right = low ? right_edge.front() : right_edge.back();
+    const double middle = 0.5 * (left - right);
+    const double half = 0.25 * (left + right);
+    std::vector<double> near;
+    for (const auto& [s, e] : se) {
+      const bool at_end = low ? s < s_lo + end_exclusion_m : s > s_hi - end_exclusion_m;
+      if (at_end && std::abs(e - middle) < half) near.push_back(s);
+    }
+    return near.size() >= 3 ? Quantile(near, 0.5) : (low ? s_lo : s_hi);
+  };
+  const double cap_lo = cap(true);
+  return {cap_lo, std::max(cap(false), cap_lo + 1e-3)};
+}
+
+/// The farthest distance reached from 0 through the sorted values with gaps of at most kTopGapM
+/// (sorts `d`; 0 if none is within kTopGapM).
+double ContiguousReach(std::vector<double>& d) {
+  std::sort(d.begin(), d.end());
+  double reach = 0.0;
+  for (std::size_t n = 0; n < d.size() && d[n] <= reach + kTopGapM; ++n) reach = std::max(reach, d[n]);
+  return reach;
+}
+
+void CheckParams(const OutlineParams& params) {
+  if (!(params.centreline_bin_m > 0.0) || !(params.station_step_m > 0.0) ||
+      !(params.edge_quantile >= 0.0 && params.edge_quantile <= 1.0) || !(params.end_exclusion_m >= 0.0) ||
+      !(params.min_width_m >= 0.0) || !(params.one_sided_max_width_m >= 0.0) ||
+      !(params.one_sided_window_m > 0.0)) {
+    throw std::invalid_argument("TraceOutline: parameter outside its domain");
+  }
+}
+
+}  // namespace
+
+PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const OutlineParams& params) {
+  CheckParams(params);
+  PartOutline outline;
+  if (points_m.size() < 3) return outline;
+
+  // 1-2. Centre line; station and offset of every point.
+  const FittedLine fit = FitCentreLine(points_m, params.centreline_bin_m, true);
+  outline.centreline_m = fit.centre.points();
+  std::vector<std::pair<double, double>> se = fit.ProjectAll(points_m);
+  const auto [s_lo, s_hi] = TrimStrays(se);
 
   // 3. Edges per station bin.
-  const auto stations = static_cast<std::size_t>(std::max(1.0, std::round((s_hi - s_lo) / params.station_step_m)));
-  const double step = std::max((s_hi - s_lo) / static_cast<double>(stations), 1e-9);
-  std::vector<std::vector<double>> left(stations);
-  std::vector<std::vector<double>> right(stations);
+  const StationBins bins(s_lo, s_hi, params.station_step_m);
+  std::vector<std::vector<double>> left(bins.count);
+  std::vector<std::vector<double>> right(bins.count);
   const bool exclude_ends = s_hi - s_lo > 4.0 * params.end_exclusion_m;
   for (const auto& [s, e] : se) {
     if (exclude_ends && (s < s_lo + params.end_exclusion_m || s > s_hi - params.end_exclusion_m)) continue;
-    const auto k = std::min(stations - 1, static_cast<std::size_t>((s - s_lo) / step));
-    (e > 0.0 ? left[k] : right[k]).push_back(std::abs(e));
+    (e > 0.0 ? left : right)[bins.Of(s)].push_back(std::abs(e));
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> left_edge(stations, nan);
-  std::vector<double> right_edge(stations, nan);
-  for (std::size_t k = 0; k < stations; ++k) {
+  std::vector<double> left_edge(bins.count, nan);
+  std::vector<double> right_edge(bins.count, nan);
+  for (std::size_t k = 0; k < bins.count; ++k) {
     if (!left[k].empty()) left_edge[k] = Quantile(left[k], params.edge_quantile);
     if (!right[k].empty()) right_edge[k] = Quantile(right[k], params.edge_quantile);
   }
   if (!FillGaps(left_edge) || !FillGaps(right_edge)) return outline;
   left_edge = MedianOfThree(left_edge);
   right_edge = MedianOfThree(right_edge);
-  std::vector<double> widths(stations);
-  for (std::size_t k = 0; k < stations; ++k) widths[k] = left_edge[k] + right_edge[k];
+  std::vector<double> widths(bins.count);
+  for (std::size_t k = 0; k < bins.count; ++k) widths[k] = left_edge[k] + right_edge[k];
   outline.median_width_m = Quantile(widths, 0.5);
   if (outline.median_width_m < params.min_width_m) return outline;
 
-  // The end caps: the median station of the points near an end and well inside the edges (cap
-  // samples); the extreme station is biased outward by the noise. Without such points (no cap
-  // sampled), the extreme station.
-  const auto cap = [&](bool low, double extreme) {
-    const double half = 0.5 * std::min(low ? left_edge.front() : left_edge.back(),
-                                       low ? right_edge.front() : right_edge.back());
-    std::vector<double> near;
-    for (const auto& [s, e] : se) {
-      const bool at_end = low ? s < s_lo + params.end_exclusion_m : s > s_hi - params.end_exclusion_m;
-      if (at_end && std::abs(e) < half) near.push_back(s);
-    }
-    return near.size() >= 3 ? Quantile(near, 0.5) : extreme;
-  };
-  const double cap_lo = cap(true, s_lo);
-  const double cap_hi = std::max(cap(false, s_hi), cap_lo + 1e-3);
+  const auto [cap_lo, cap_hi] = CapStations(se, s_lo, s_hi, params.end_exclusion_m, left_edge, right_edge);
 
-  // 4. Polygon: right edge forward, left edge backward; the caps close it.
-  std::vector<double> at;          // stations of the vertices
-  std::vector<std::size_t> which;  // their station bins
-  at.push_back(cap_lo);
-  which.push_back(0);
-  for (std::size_t k = 0; k < stations; ++k) {
-    const double s = s_lo + (static_cast<double>(k) + 0.5) * step;
-    if (s <= cap_lo || s >= cap_hi) continue;
-    at.push_back(s);
-    which.push_back(k);
-  }
-  at.push_back(cap_hi);
-  which.push_back(stations - 1);
-  for (std::size_t v = 0; v < at.size(); ++v) {
-    const auto [position, normal] = centre.At(at[v]);
-    outline.polygon_m.push_back(position - right_edge[which[v]] * normal);
-  }
-  for (std::size_t v = at.size(); v-- > 0;) {
-    const auto [position, normal] = centre.At(at[v]);
-    outline.polygon_m.push_back(position + left_edge[which[v]] * normal);
-  }
+  // 4. Polygon.
+  outline.polygon_m = AssemblePolygon(fit.centre, bins, cap_lo, cap_hi, left_edge, right_edge);
   outline.length_m = cap_hi - cap_lo;
+  return outline;
+}
+
+PartOutline TraceOneSidedOutline(const std::vector<Eigen::Vector2d>& face_m, const std::vector<Eigen::Vector2d>& top_m,
+                                 const OutlineParams& params) {
+  CheckParams(params);
+  PartOutline outline;
+  if (face_m.size() < 3 || params.one_sided_max_width_m <= 0.0) return outline;
+
+  // The face: its line, its station range and its offset from the line per station bin. The end
+  // caps' points lie across the canopy, not on the face: the line is fitted again without them
+  // (they would bend its ends), and they are left out of the offsets as in TraceOutline.
+  FittedLine fit = FitCentreLine(face_m, params.centreline_bin_m, false);
+  std::vector<std::pair<double, double>> se = fit.ProjectAll(face_m);
+  {
+    std::vector<std::pair<double, double>> trimmed = se;
+    const auto [lo, hi] = TrimStrays(trimmed);
+    std::vector<Eigen::Vector2d> inner;
+    for (std::size_t k = 0; k < face_m.size(); ++k) {
+      if (se[k].first > lo + params.end_exclusion_m && se[k].first < hi - params.end_exclusion_m) inner.push_back(face_m[k]);
+    }
+    if (inner.size() >= 3) {
+      fit = FitCentreLine(inner, params.centreline_bin_m, false);
+      se = fit.ProjectAll(face_m);
+    }
+  }
+  outline.centreline_m = fit.centre.points();
+  const auto [s_lo, s_hi] = TrimStrays(se);
+  const StationBins bins(s_lo, s_hi, params.station_step_m);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::vector<double>> face_offsets(bins.count);
+  const bool exclude_ends = s_hi - s_lo > 4.0 * params.end_exclusion_m;
+  for (const auto& [s, e] : se) {
+    if (exclude_ends && (s < s_lo + params.end_exclusion_m || s > s_hi - params.end_exclusion_m)) continue;
+    face_offsets[bins.Of(s)].push_back(e);
+  }
+  std::vector<double> face(bins.count, nan);
+  for (std::size_t k = 0; k < bins.count; ++k) {
+    if (!face_offsets[k].empty()) face[k] = Quantile(face_offsets[k], 0.5);
+  }
+  if (!FillGaps(face)) return outline;
+  face = MedianOfThree(face);
+
+  // The top's cells by station bin, as distances from the face (> 0: to the face's left).
+  std::vector<std::vector<double>> depth(bins.count);
+  for (const auto& [s, e] : fit.ProjectAll(top_m)) {
+    if (s < s_lo || s > s_hi) continue;
+    const std::size_t k = bins.Of(s);
+    const double d = e - face[k];
+    if (std::abs(d) <= params.one_sided_max_width_m) depth[k].push_back(d);
+  }
+
+  // Per station, over a window of one_sided_window_m: the cells of each side that are contiguous
+  // with the face (gaps of at most kTopGapM; beyond a wider gap lies the next row), and the width
+  // from their upper quantile (cells spread evenly from the face to the far edge).
+  const auto half_window = static_cast<std::size_t>(std::ceil(0.5 * params.one_sided_window_m / bins.step));
+  std::vector<double> width[2] = {std::vector<double>(bins.count, nan), std::vector<double>(bins.count, nan)};
+  std::size_t cells[2] = {0, 0};
+  for (std::size_t k = 0; k < bins.count; ++k) {
+    const std::size_t first = k > half_window ? k - half_window : 0;
+    const std::size_t last = std::min(bins.count - 1, k + half_window);
+    for (int i = 0; i < 2; ++i) {
+      const double sign = i == 0 ? 1.0 : -1.0;  // 0: to the face's left
+      std::vector<double> window;
+      for (std::size_t j = first; j <= last; ++j) {
+        for (double d : depth[j]) {
+          if (sign * d >= -kTopGapM) window.push_back(sign * d);
+        }
+      }
+      const double reach = ContiguousReach(window);
+      std::erase_if(window, [&](double d) { return d > reach; });
+      cells[i] += window.size();
+      if (window.size() >= kMinTopCells) width[i][k] = std::max(0.0, Quantile(window, kTopQuantile)) / kTopQuantile;
+    }
+  }
+  const int canopy_side = cells[0] >= cells[1] ? 0 : 1;
+  std::vector<double>& w = width[canopy_side];
+  std::size_t measured = 0;
+  for (double v : w) measured += std::isnan(v) ? 0 : 1;
+  // The top must be seen along at least half the part: elsewhere its width is interpolated.
+  if (2 * measured < bins.count || !FillGaps(w)) return outline;
+  w = MedianOfThree(w);
+  std::vector<double> sorted = w;
+  outline.median_width_m = Quantile(sorted, 0.5);
+  sorted = w;
+  outline.width_spread_m = 0.5 * (Quantile(sorted, 0.75) - Quantile(sorted, 0.25)) / 0.6745;
+  if (outline.median_width_m < params.min_width_m) return outline;
+
+  std::vector<double> left_edge(bins.count);
+  std::vector<double> right_edge(bins.count);
+  for (std::size_t k = 0; k < bins.count; ++k) {
+    left_edge[k] = canopy_side == 0 ? face[k] + w[k] : face[k];
+    right_edge[k] = canopy_side == 0 ? -face[k] : w[k] - face[k];
+  }
+  const auto [cap_lo, cap_hi] = CapStations(se, s_lo, s_hi, params.end_exclusion_m, left_edge, right_edge);
+  outline.polygon_m = AssemblePolygon(fit.centre, bins, cap_lo, cap_hi, left_edge, right_edge);
+  outline.length_m = cap_hi - cap_lo;
+  outline.one_sided = true;
   return outline;
 }
 

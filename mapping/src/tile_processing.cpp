@@ -2,15 +2,18 @@
 #include "rowloc/mapping/tile_processing.hpp"
 
 #include "rowloc/mapping/cloud_cleaning.hpp"
+#include "rowloc/mapping/row_outline.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <stdexcept>
 #include <thread>
+#include <unordered_set>
 #include <utility>
 
 namespace rowloc::mapping {
@@ -19,6 +22,33 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double SecondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+/// Keeps the first point of each square cell of edge cell_m (on the lattice anchored at 0): an
+/// actual point, so that the kept points spread evenly over a region up to its edges (centroids
+/// would stop half a cell short of an edge aligned with the lattice).
+void KeepOnePerCell(std::vector<Eigen::Vector2d>& points_m, double cell_m) {
+  std::unordered_set<std::uint64_t> seen;
+  seen.reserve(points_m.size() / 4);
+  std::erase_if(points_m, [&](const Eigen::Vector2d& p) {
+    const auto i = static_cast<std::int64_t>(std::floor(p.x() / cell_m));
+    const auto j = static_cast<std::int64_t>(std::floor(p.y() / cell_m));
+    const std::uint64_t key = (static_cast<std::uint64_t>(i) << 32) ^ (static_cast<std::uint64_t>(j) & 0xffffffffULL);
+    return !seen.insert(key).second;
+  });
+  points_m.shrink_to_fit();
+}
+
+/// Replaces the points by one centroid per square cell of edge cell_m (the voxel grid of step 1).
+void ThinToCells(std::vector<Eigen::Vector2d>& points_m, double cell_m) {
+  if (points_m.empty()) return;
+  PointCloud flat;
+  flat.points_m.reserve(points_m.size());
+  for (const auto& p : points_m) flat.points_m.emplace_back(p.x(), p.y(), 0.0);
+  std::vector<Eigen::Vector2d>().swap(points_m);
+  const CleanResult cells = CleanCloud(flat, CleanParams{cell_m, 0, 3.0});
+  points_m.reserve(cells.cloud.points_m.size());
+  for (const auto& p : cells.cloud.points_m) points_m.push_back(p.head<2>());
+}
 
 /// The survey's DTM lattice, and which of its cells are set.
 struct DtmAssembly {
@@ -123,6 +153,8 @@ TileProducts NormalizeTile(const std::vector<Eigen::Vector3d>& cleaned_m, const 
   start = Clock::now();
   const std::vector<double> levels = MeshLevelHeights(config.mesh);
   out.level_band_m.resize(levels.size());
+  const bool keep_top = config.outline.one_sided_max_width_m > 0.0;
+  const double top_from_m = config.band.reference_height_m + config.band.band_half_width_m;
   std::size_t core_index = 0;
   for (const Eigen::Vector3d& p : cleaned_m) {
     const Eigen::Vector2d xy = p.head<2>();
@@ -130,6 +162,7 @@ TileProducts NormalizeTile(const std::vector<Eigen::Vector3d>& cleaned_m, const 
     ++out.core_cleaned;
     const double h = p.z() - out.terrain->HeightAt(xy);
     if (std::abs(h - config.band.reference_height_m) <= config.band.band_half_width_m) out.band_m.push_back(xy);
+    if (keep_top && h > top_from_m) out.top_m.push_back(xy);
     for (std::size_t k = 0; k < levels.size(); ++k) {
       if (std::abs(h - levels[k]) <= config.band.band_half_width_m) out.level_band_m[k].push_back(xy);
     }
@@ -141,16 +174,8 @@ TileProducts NormalizeTile(const std::vector<Eigen::Vector3d>& cleaned_m, const 
   }
   // The mesh levels' bands thinned to one centroid per 2 cm cell: the stack of a face's points at
   // one station collapses, the outline's edges keep their centimetres, memory drops 3-6 times.
-  for (auto& band : out.level_band_m) {
-    if (band.empty()) continue;
-    PointCloud flat;
-    flat.points_m.reserve(band.size());
-    for (const auto& p : band) flat.points_m.emplace_back(p.x(), p.y(), 0.0);
-    const CleanResult cells = CleanCloud(flat, CleanParams{kLevelBandCellM, 0, 3.0});
-    band.clear();
-    for (const auto& p : cells.cloud.points_m) band.push_back(p.head<2>());
-    band.shrink_to_fit();
-  }
+  for (auto& band : out.level_band_m) ThinToCells(band, kLevelBandCellM);
+  KeepOnePerCell(out.top_m, kTopCellM);
   out.normalize_seconds = SecondsSince(start);
   return out;
 }
@@ -233,6 +258,7 @@ SurveyProducts ProcessTiles(TiledCloud& cloud, const Eigen::Vector2d& offset_m, 
     survey.sample_m.insert(survey.sample_m.end(), p.sample_m.begin(), p.sample_m.end());
     survey.sample_height_m.insert(survey.sample_height_m.end(), p.sample_height_m.begin(), p.sample_height_m.end());
     survey.canopy_m.insert(survey.canopy_m.end(), p.canopy_m.begin(), p.canopy_m.end());
+    survey.top_m.insert(survey.top_m.end(), p.top_m.begin(), p.top_m.end());
     survey.level_band_m.resize(p.level_band_m.size());
     for (std::size_t level = 0; level < p.level_band_m.size(); ++level) {
       survey.level_band_m[level].insert(survey.level_band_m[level].end(), p.level_band_m[level].begin(),

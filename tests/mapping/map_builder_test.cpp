@@ -12,6 +12,7 @@
 #include <GeographicLib/UTMUPS.hpp>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <fstream>
 #include <sstream>
@@ -119,6 +120,34 @@ TEST(MapBuilderTest, UtmCloudGivesTheSameMapAsTheLocalOne) {
   EXPECT_GT(std::abs(gamma), 0.5);  // the rotation is real: a plain offset would be off by decimetres
 }
 
+TEST(MapBuilderTest, RowsSeenFromOneSideTakeTheirWidthFromTheCanopyTop) {
+  test::SyntheticField field = SlopedField();
+  field.one_sided = true;
+  const MapBuildResult result = BuildRowMap(field.Cloud(), MapBuildConfig{}, Georeference::Local(kOrigin));
+  ASSERT_TRUE(result.map.has_value()) << result.message;
+  ASSERT_EQ(result.map->rows.size(), 4U);
+  EXPECT_EQ(result.one_sided_parts, 4U);
+  EXPECT_EQ(result.outlines_failed, 0U);
+  EXPECT_THAT(result.message, HasSubstr("4 parts seen from one side only"));
+  for (const PartReport& part : result.parts) {
+    EXPECT_TRUE(part.one_sided);
+    EXPECT_NEAR(part.width_m, 0.5, 0.03) << part.id;
+    EXPECT_LT(part.width_spread_m, 0.02) << part.id;
+  }
+  const MapComparison c = CompareRowMaps(*result.map, TrueMap(field));
+  EXPECT_TRUE(c.missed.empty());
+  EXPECT_TRUE(c.invented.empty());
+  EXPECT_LT(c.p95_m, 0.02);
+  EXPECT_LT(c.max_m, 0.05);
+  // With the route off, the same parts are single faces: reported, not mapped.
+  MapBuildConfig off;
+  off.outline.one_sided_max_width_m = 0.0;
+  const MapBuildResult faces = BuildRowMap(field.Cloud(), off, Georeference::Local(kOrigin));
+  EXPECT_FALSE(faces.map.has_value());
+  EXPECT_EQ(faces.outlines_failed, 4U);
+  EXPECT_THAT(faces.message, HasSubstr("single canopy faces"));
+}
+
 TEST(MapBuilderTest, NoRowsIsAResultNotAnError) {
   test::SyntheticField flat;
   flat.rows = {{0, 10, 0.0, 0.25}};
@@ -162,6 +191,14 @@ TEST(MapBuilderTest, RunMapBuildWritesEveryOutput) {
   report << std::ifstream(dir / "out/report.txt").rdbuf();
   EXPECT_THAT(report.str(), HasSubstr("3 rows (4 parts"));
   EXPECT_THAT(report.str(), HasSubstr("data reduction"));
+  // The JSON report: one entry per part with its width, measured from both faces here.
+  const nlohmann::json json = nlohmann::json::parse(std::ifstream(dir / "out/report.json"));
+  ASSERT_EQ(json.at("row_parts").size(), 4U);
+  for (const auto& part : json.at("row_parts")) {
+    EXPECT_FALSE(part.at("one_sided").get<bool>());
+    EXPECT_NEAR(part.at("width_m").get<double>(), 0.5, 0.02);
+  }
+  EXPECT_EQ(json.at("one_sided_parts").get<int>(), 0);
   std::stringstream svg;
   svg << std::ifstream(dir / "out/map.svg").rdbuf();
   EXPECT_THAT(svg.str(), HasSubstr("<svg"));

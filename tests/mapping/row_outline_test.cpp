@@ -1,4 +1,5 @@
-// TraceOutline: the outline of a box row and of an arc row traced from face and cap samples.
+// TraceOutline: the outline of a box row and of an arc row traced from face and cap samples;
+// TraceOneSidedOutline: the same rows seen from one side, their hidden face from the canopy top.
 #include "rowloc/mapping/row_outline.hpp"
 
 #include "rowloc/geometry/row_map.hpp"
@@ -6,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -80,6 +82,105 @@ TEST(RowOutlineTest, TooFewPointsGiveNoOutlineAndBadParametersThrow) {
   OutlineParams bad;
   bad.edge_quantile = 2.0;
   EXPECT_THROW(TraceOutline(line, bad), std::invalid_argument);
+}
+
+/// A scan from one side of a box row over x in [2, 12]: its face at y = face_y (band points, 5 mm
+/// noise, and the caps' band points across the canopy) and the top's cells over y in [lo, hi]
+/// (one point in each 5 cm cell), plus the tops of the neighbouring rows 2.5 m away on both sides.
+struct OneSidedScan {
+  std::vector<Eigen::Vector2d> face;
+  std::vector<Eigen::Vector2d> top;
+};
+
+OneSidedScan ScanFromOneSide(double face_y, double lo, double hi, double top_until_x = 12.0) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  OneSidedScan scan;
+  for (double x = 2.0; x <= 12.0; x += 0.02) {
+    for (int h = 0; h < 4; ++h) scan.face.emplace_back(x, face_y + noise(rng));
+  }
+  for (double y = lo + 0.05; y <= hi - 0.05; y += 0.05) {
+    for (int h = 0; h < 4; ++h) {
+      scan.face.emplace_back(2.0 + noise(rng), y);
+      scan.face.emplace_back(12.0 + noise(rng), y);
+    }
+  }
+  // The top as the map build keeps it: one point of each 5 cm cell, anywhere in the cell.
+  std::uniform_real_distribution<double> in_cell(0.0, 0.05);
+  for (double shift : {-2.5, 0.0, 2.5}) {
+    for (double x = 2.0; x < top_until_x; x += 0.05) {
+      for (double y = lo; y < hi - 1e-9; y += 0.05) scan.top.emplace_back(x + in_cell(rng), y + in_cell(rng) + shift);
+    }
+  }
+  return scan;
+}
+
+TEST(RowOneSidedOutlineTest, TheHiddenFaceComesFromTheTopOnEitherSide) {
+  const std::vector<Eigen::Vector2d> rectangle = {{2, -0.3}, {12, -0.3}, {12, 0.3}, {2, 0.3}};
+  for (const double face_y : {0.3, -0.3}) {
+    SCOPED_TRACE(face_y);
+    const OneSidedScan scan = ScanFromOneSide(face_y, -0.3, 0.3);
+    // The two-sided route sees one face, too narrow to be a canopy.
+    EXPECT_TRUE(TraceOutline(scan.face, OutlineParams{}).polygon_m.empty());
+    const PartOutline outline = TraceOneSidedOutline(scan.face, scan.top, OutlineParams{});
+    ASSERT_GE(outline.polygon_m.size(), 4U);
+    EXPECT_TRUE(outline.one_sided);
+    EXPECT_NEAR(outline.median_width_m, 0.6, 0.02);
+    EXPECT_LT(outline.width_spread_m, 0.02);
+    EXPECT_NEAR(outline.length_m, 10.0, 0.03);
+    EXPECT_NEAR(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true}), 6.0, 0.15);
+    EXPECT_LT(WorstDistance(rectangle, outline.polygon_m), 0.025);
+    EXPECT_LT(WorstDistance(outline.polygon_m, rectangle), 0.03);
+  }
+}
+
+TEST(RowOneSidedOutlineTest, ArcRowSeenFromOutsideFollowsTheCurve) {
+  // A 60-degree arc of radius 20 m, canopy 0.5 m wide, seen from outside (its face at r + 0.25).
+  const double r = 20.0;
+  std::vector<Eigen::Vector2d> face;
+  std::vector<Eigen::Vector2d> top;
+  for (double a = 0.0; a <= M_PI / 3; a += 0.02 / r) face.emplace_back((r + 0.25) * std::cos(a), (r + 0.25) * std::sin(a));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> in_cell(0.0, 0.05);
+  for (double a = 0.0; a < M_PI / 3; a += 0.05 / r) {  // one point in each cell of about 5 cm
+    for (double w = -0.25; w < 0.25 - 1e-9; w += 0.05) {
+      const double b = a + in_cell(rng) / r;
+      const double u = w + in_cell(rng);
+      top.emplace_back((r + u) * std::cos(b), (r + u) * std::sin(b));
+    }
+  }
+  const PartOutline outline = TraceOneSidedOutline(face, top, OutlineParams{});
+  ASSERT_GE(outline.polygon_m.size(), 4U);
+  double worst = 0.0;
+  for (const auto& p : outline.polygon_m) {
+    const double d = p.norm();
+    const double a = std::atan2(p.y(), p.x());
+    const double to_faces = std::min(std::abs(d - (r - 0.25)), std::abs(d - (r + 0.25)));
+    const double to_caps = std::min(std::abs(a), std::abs(a - M_PI / 3)) * r;
+    worst = std::max(worst, std::min(to_faces, to_caps));
+  }
+  EXPECT_LT(worst, 0.02);
+}
+
+TEST(RowOneSidedOutlineTest, WithoutEnoughOfTheTopOrWithTheRouteOffThereIsNoOutline) {
+  const OneSidedScan scan = ScanFromOneSide(0.3, -0.3, 0.3);
+  EXPECT_TRUE(TraceOneSidedOutline(scan.face, {}, OutlineParams{}).polygon_m.empty());
+  // The top seen along less than half of the part: its width would be guessed.
+  const OneSidedScan partial = ScanFromOneSide(0.3, -0.3, 0.3, 6.0);
+  EXPECT_TRUE(TraceOneSidedOutline(partial.face, partial.top, OutlineParams{}).polygon_m.empty());
+  OutlineParams off;
+  off.one_sided_max_width_m = 0.0;
+  EXPECT_TRUE(TraceOneSidedOutline(scan.face, scan.top, off).polygon_m.empty());
+  EXPECT_TRUE(TraceOneSidedOutline({{0, 0}, {1, 0}}, scan.top, OutlineParams{}).polygon_m.empty());
+  // A top narrower than min_width_m is no canopy.
+  const OneSidedScan thin = ScanFromOneSide(0.3, 0.25, 0.3);
+  EXPECT_TRUE(TraceOneSidedOutline(thin.face, thin.top, OutlineParams{}).polygon_m.empty());
+  OutlineParams bad;
+  bad.one_sided_window_m = 0.0;
+  EXPECT_THROW(TraceOneSidedOutline(scan.face, scan.top, bad), std::invalid_argument);
+  bad = OutlineParams{};
+  bad.one_sided_max_width_m = -1.0;
+  EXPECT_THROW(TraceOutline(scan.face, bad), std::invalid_argument);
 }
 
 }  // namespace

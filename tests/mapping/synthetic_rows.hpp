@@ -29,6 +29,7 @@ struct SyntheticField {
   double spacing = 0.05;    ///< sampling step
   double ground_margin = 1.5;  ///< ground sampled this far around the rows
   bool ground = true;
+  bool one_sided = false;   ///< leave out the faces at y + half_width (a scan from one side)
 
   double Ground(double x, double y) const { return grade_x * x + grade_y * y + z0; }
 
@@ -47,7 +48,7 @@ struct SyntheticField {
       for (double x = r.x0; x <= r.x1 + 1e-9; x += s) {
         for (double h = bottom; h <= top + 1e-9; h += s) {
           add(x, r.y - r.half_width, h);
-          add(x, r.y + r.half_width, h);
+          if (!one_sided) add(x, r.y + r.half_width, h);
         }
         for (double y = r.y - r.half_width + s; y < r.y + r.half_width - 1e-9; y += s) add(x, y, top);
       }

@@ -64,8 +64,10 @@ struct OutlineParams {
   double station_step_m = 0.05;      ///< edge estimate every this much along the centre line
   double edge_quantile = 0.5;        ///< quantile of the lateral offsets of one side in a station bin
   double end_exclusion_m = 0.1;      ///< points this close to a part's end are left out of the edges
-  double min_width_m = 0.05;         ///< narrower outlines (median width) are rejected: a lone face
+  double min_width_m = 0.1;          ///< narrower outlines (median width) are rejected: a lone face
   double simplify_tolerance_m = 0.01;   ///< CGAL Polyline_simplification_2 tolerance; 0: none
+  double one_sided_max_width_m = 2.0;   ///< parts seen from one side: widest canopy; 0: not mapped
+  double one_sided_window_m = 1.0;      ///< parts seen from one side: window of each width estimate
 };
 
 /// Steps 5-6, mesh route: outlines at `levels` heights from lowest_m to highest_m above the terrain
@@ -100,7 +102,8 @@ class MapBuildConfigError : public std::runtime_error {
 /// Why the configuration is invalid ("rows.max_gap_m: must be in [0, 100], got -1"); empty if valid.
 std::optional<std::string> ValidateMapBuildConfig(const MapBuildConfig& config);
 
-/// Reads a configuration file (every key required, no unknown key). Throws MapBuildConfigError.
+/// Reads a configuration file: an overlay on the defaults (a section or key left out keeps its
+/// default value), no unknown section or key, every value in its domain. Throws MapBuildConfigError.
 MapBuildConfig LoadMapBuildConfig(const std::filesystem::path& path);
 
 /// The JSON text of a configuration (the format LoadMapBuildConfig reads).

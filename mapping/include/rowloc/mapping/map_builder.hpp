@@ -75,6 +75,9 @@ struct PartReport {
   std::size_t traced_vertices = 0; ///< before simplification
   std::size_t vertices = 0;        ///< in the map
   bool simplified = false;         ///< false: CGAL refused (not simple) or tolerance 0
+  bool one_sided = false;          ///< seen from one side: the hidden face from the canopy top (row_outline.hpp)
+  double width_m = 0.0;            ///< median width of its outline at h_ref
+  double width_spread_m = 0.0;     ///< one-sided: spread of the width over its stations (IQR / 1.349)
   int mesh_levels = 0;             ///< outlines lofted into its mesh (0: no mesh)
   std::size_t mesh_triangles = 0;
   std::optional<double> mesh_slice_max_m;  ///< its mesh cut at h_ref against its outline, largest distance
@@ -92,6 +95,7 @@ struct MapBuildResult {
   std::size_t parts_dropped = 0;
   std::size_t links = 0;
   std::size_t outlines_failed = 0;      ///< parts without a usable outline (skipped)
+  std::size_t one_sided_parts = 0;      ///< parts in the map traced from one face and the canopy top
   std::size_t tiles = 0;                ///< tiles processed (steps 1-3)
   int tile_threads = 1;                 ///< threads of the outlier removal
   std::size_t largest_tile_points = 0;  ///< points of the largest tile, overlap included

@@ -7,7 +7,8 @@
 // distances over the tile: in a survey whose density changes across the field, each tile is
 // judged against its own density), the tile's DTM on the survey-wide DTM lattice, heights above it,
 // and then keeps only what lies in the core: the band points (at h_ref and at each mesh level, these
-// thinned to one per kLevelBandCellM cell), the cleaned points' sample for the SVG and, if asked,
+// thinned to one per kLevelBandCellM cell), the points above the band (the canopy's top, thinned to
+// the first point of each kTopCellM cell, for parts seen from one side: row_outline.hpp), the cleaned points' sample for the SVG and, if asked,
 // the canopy points. The overlap (>= terrain.classification_radius_m) gives the
 // core's cells the whole neighbourhood of their ground fit, so a core's products do not depend on
 // where the tile boundaries fall, up to the outlier statistics.
@@ -24,7 +25,7 @@
 //
 // Memory: one tile at a time, ~(24 + 80) bytes per point of the tile while it is processed (its
 // points, the voxel keys, the float copy and FLANN's k-d tree), plus the merged products: 16 bytes
-// per band point (h_ref and mesh levels), the DTM (9 bytes per cell), the SVG sample (<= 20,000
+// per band point (h_ref and mesh levels) and top cell, the DTM (9 bytes per cell), the SVG sample (<= 20,000
 // points) and, with keep_canopy, 24 bytes per canopy point.
 #pragma once
 
@@ -59,6 +60,7 @@ struct TileProducts {
   std::vector<double> sample_height_m;         ///< their heights above the terrain
   std::vector<Eigen::Vector3d> canopy_m;       ///< keep_canopy: cleaned core points above the ground tolerance
   std::vector<std::vector<Eigen::Vector2d>> level_band_m;  ///< per mesh level (MeshLevelHeights): the core's band points, one per kLevelBandCellM cell
+  std::vector<Eigen::Vector2d> top_m;          ///< the core's points above the band, the first of each kTopCellM cell (if outline.one_sided_max_width_m > 0)
 };
 
 struct TileJob {
@@ -118,6 +120,7 @@ struct SurveyProducts {
   std::vector<double> sample_height_m;
   std::vector<Eigen::Vector3d> canopy_m;
   std::vector<std::vector<Eigen::Vector2d>> level_band_m;  ///< per mesh level, as TileProducts
+  std::vector<Eigen::Vector2d> top_m;                      ///< as TileProducts
 };
 
 /// ProcessTile over every tile of `cloud` (whose points are `offset_m` + working frame), releasing
