@@ -251,4 +251,10 @@ FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view sour
 /// Reads and parses a filter file. Throws FilterConfigError (including for a missing file).
 FilterConfig LoadFilterConfig(const std::filesystem::path& path);
 
+/// Every value of `config` as a complete filter file: canonical JSON (the file format's keys in
+/// its order, two-space indent, numbers in their shortest round-trip form, a final newline).
+/// Parsing it gives `config` back exactly. `rowloc config show` prints it; the service records
+/// it in a session's journal metadata.
+std::string FilterConfigJson(const FilterConfig& config);
+
 }  // namespace rowloc::localization
