@@ -1,7 +1,10 @@
-// Filter configuration files (filter_config.hpp). The reader checks types and key sets; every
+// Filter configuration files (filter_config.hpp). A file is an overlay on the in-code defaults
+// (mapio/config_overlay.hpp): the defaults are serialized (ConfigDocument), the file's layers are
+// merged onto them, and the complete document is read. The reader checks types and key sets; every
 // value rule lives in FilterConfigProblem so that in-code and file configurations obey the same.
 #include "rowloc/localization/filter_config.hpp"
 
+#include "rowloc/mapio/config_overlay.hpp"
 #include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <algorithm>
@@ -317,6 +320,44 @@ nlohmann::ordered_json ConfigDocument(const FilterConfig& c) {
   };
 }
 
+nlohmann::json DefaultsDocument() {
+  return nlohmann::json::parse(ConfigDocument(FilterConfig{}).dump());
+}
+
+/// Runs a reader of configuration layers; its errors become FilterConfigErrors (same message).
+template <typename Read>
+std::vector<mapio::ConfigLayer> Layers(Read&& read) {
+  try {
+    return read();
+  } catch (const mapio::ConfigOverlayError& e) {
+    throw FilterConfigError(e.what());
+  }
+}
+
+/// A filter from its layers (base first): each layer merged alone onto the defaults is read first,
+/// so that an unknown key, a wrong type or a missing name is reported with the file that has it;
+/// then all of them merged in order onto the defaults, whose values are checked (FilterConfigProblem)
+/// and reported with `source`, the file that was asked for.
+FilterConfig ReadLayers(const std::vector<mapio::ConfigLayer>& layers, const std::string& source) {
+  const nlohmann::json defaults = DefaultsDocument();
+  for (const mapio::ConfigLayer& layer : layers) {
+    if (!layer.document.contains("name")) {
+      throw FilterConfigError(layer.file.string() + ": name: missing key (every filter file names itself; "
+                                                    "the keys it leaves out keep their default values)");
+    }
+    if (layers.size() == 1) break;  // read below, with the same name
+    nlohmann::json alone = defaults;
+    mapio::MergeOverlay(alone, layer.document);
+    Reader reader(alone, layer.file.string(), "");
+    (void)ReadConfig(reader);
+  }
+  const nlohmann::json merged = mapio::MergeLayers(defaults, layers);
+  Reader root(merged, source, "");
+  FilterConfig config = ReadConfig(root);
+  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError(source + ": " + *problem);
+  return config;
+}
+
 }  // namespace
 
 std::string FilterConfigJson(const FilterConfig& config) { return ConfigDocument(config).dump(2) + "\n"; }
@@ -372,15 +413,25 @@ double GpsSigma(const GpsNoise& noise, formats::GnssFixQuality fix, double recei
 
 FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name) {
   const std::string source(source_name);
-  const nlohmann::json document = mapio::detail::ParseJsonText<FilterConfigError>(json_text, source);
-  Reader root(document, source, "");
-  FilterConfig config = ReadConfig(root);
-  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError(source + ": " + *problem);
-  return config;
+  return ReadLayers(Layers([&] { return std::vector{mapio::ParseStandaloneLayer(json_text, source)}; }), source);
+}
+
+FilterConfig ParseFilterConfigFile(std::string_view json_text, const std::filesystem::path& path) {
+  return ReadLayers(Layers([&] { return mapio::ParseConfigLayers(json_text, path.string(), path.parent_path(),
+                                                                 "filter file"); }),
+                    path.string());
 }
 
 FilterConfig LoadFilterConfig(const std::filesystem::path& path) {
-  return ParseFilterConfig(mapio::detail::ReadTextFile<FilterConfigError>(path, "filter file"), path.string());
+  return ReadLayers(Layers([&] { return mapio::ReadConfigLayers(path, "filter file"); }), path.string());
+}
+
+std::vector<std::filesystem::path> FilterConfigFiles(const std::filesystem::path& path) {
+  std::vector<std::filesystem::path> files;
+  for (const mapio::ConfigLayer& layer : Layers([&] { return mapio::ReadConfigLayers(path, "filter file"); })) {
+    files.push_back(layer.file);
+  }
+  return files;
 }
 
 }  // namespace rowloc::localization
