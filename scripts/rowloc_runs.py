@@ -32,6 +32,32 @@ def run(command, tool):
         sys.exit(1)
 
 
+def effective_filter(rowloc, filter_path, tool):
+    """Every value a filter file loads to (`rowloc config show --filter FILE`; the built-in defaults
+    with filter_path None), as a dict: filter files are overlays on the defaults and may extend
+    another file, so their own JSON lists only part of the values."""
+    command = [rowloc, "config", "show"] + (["--filter", filter_path] if filter_path else [])
+    result = subprocess.run(command, capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.stderr.write(f"{tool}: {' '.join(command)} failed ({result.returncode}):\n{result.stderr}")
+        sys.exit(1)
+    return json.loads(result.stdout)
+
+
+def overlay_on(defaults, config):
+    """The keys of config whose values differ from defaults (nested objects compared key by key):
+    what a filter file states as an overlay on the defaults."""
+    changed = {}
+    for key, value in config.items():
+        if isinstance(value, dict) and isinstance(defaults.get(key), dict):
+            inner = overlay_on(defaults[key], value)
+            if inner:
+                changed[key] = inner
+        elif key not in defaults or defaults[key] != value or type(defaults[key]) is not type(value):
+            changed[key] = value
+    return changed
+
+
 def simulate(rowloc, scenario, seed, run_dir, tool):
     """`rowloc simulate SCENARIO --seed N` into run_dir (sensors.ndjson, truth.ndjson)."""
     run([rowloc, "simulate", scenario, "-o", run_dir, "--seed", str(seed)], tool)

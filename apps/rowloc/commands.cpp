@@ -64,6 +64,7 @@ void RegisterCommands(CLI::App& app) {
   RegisterReplayCommand(app);
   RegisterServeCommand(app);
   RegisterSendCommand(app);
+  RegisterConfigCommand(app);
 }
 
 }  // namespace rowloc::apps

@@ -46,5 +46,6 @@ void RegisterEvaluateCommand(CLI::App& app);   // evaluate_command.cpp
 void RegisterReplayCommand(CLI::App& app);     // replay_command.cpp
 void RegisterServeCommand(CLI::App& app);      // serve_command.cpp
 void RegisterSendCommand(CLI::App& app);       // send_command.cpp
+void RegisterConfigCommand(CLI::App& app);     // config_command.cpp
 
 }  // namespace rowloc::apps

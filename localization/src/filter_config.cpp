@@ -1,7 +1,10 @@
-// Filter configuration files (filter_config.hpp). The reader checks types and key sets; every
+// Filter configuration files (filter_config.hpp). A file is an overlay on the in-code defaults
+// (mapio/config_overlay.hpp): the defaults are serialized (ConfigDocument), the file's layers are
+// merged onto them, and the complete document is read. The reader checks types and key sets; every
 // value rule lives in FilterConfigProblem so that in-code and file configurations obey the same.
 #include "rowloc/localization/filter_config.hpp"
 
+#include "rowloc/mapio/config_overlay.hpp"
 #include "rowloc/mapio/detail/json_object_reader.hpp"
 
 #include <algorithm>
@@ -227,7 +230,137 @@ FilterConfig ReadConfig(Reader& root) {
   return c;
 }
 
+/// The inverse of ReadConfig, in the file's key order.
+nlohmann::ordered_json ConfigDocument(const FilterConfig& c) {
+  const ProcessNoise& q = c.process_noise;
+  const SlipAwareOdometryConfig& s = c.slip_aware_odometry;
+  const InitialisationConfig& i = c.initialisation;
+  const GpsNoise& g = c.gps;
+  const WheelNoise& w = c.wheels;
+  const MapAidedConfig& a = c.map_aided;
+  using Object = nlohmann::ordered_json;
+  return Object{
+      {"name", c.name},
+      {"process_noise",
+       Object{{"jerk_mps3_per_sqrt_hz", q.jerk_mps3_per_sqrt_hz},
+              {"yaw_acceleration_radps2_per_sqrt_hz", q.yaw_acceleration_radps2_per_sqrt_hz},
+              {"velocity_mps_per_sqrt_hz", q.velocity_mps_per_sqrt_hz},
+              {"steering_rate_radps_per_sqrt_hz", q.steering_rate_radps_per_sqrt_hz},
+              {"gyro_bias_radps_per_sqrt_hz", q.gyro_bias_radps_per_sqrt_hz},
+              {"accel_bias_mps2_per_sqrt_hz", q.accel_bias_mps2_per_sqrt_hz}}},
+      {"slip_aware_odometry",
+       Object{{"enabled", s.enabled},
+              {"rolling_radius_sigma_m", s.rolling_radius_sigma_m},
+              {"slip_compliance_initial", s.slip_compliance_initial},
+              {"slip_compliance_sigma", s.slip_compliance_sigma},
+              {"max_model_slip", s.max_model_slip},
+              {"rolling_radius_noise_m_per_sqrt_m", s.rolling_radius_noise_m_per_sqrt_m},
+              {"slip_compliance_noise_per_sqrt_m", s.slip_compliance_noise_per_sqrt_m},
+              {"slip_compliance_wheel_correlation", s.slip_compliance_wheel_correlation},
+              {"rolling_radius_noise_wheel_correlation", s.rolling_radius_noise_wheel_correlation},
+              {"rolling_radius_prior_wheel_correlation", s.rolling_radius_prior_wheel_correlation},
+              {"traction_from_acceleration", s.traction_from_acceleration},
+              {"torque_sigma_nm", s.torque_sigma_nm},
+              {"traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
+              {"slip_with_rolling_radius", s.slip_with_rolling_radius},
+              {"carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m},
+              {"carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma}}},
+      {"initialisation",
+       Object{{"heading_baseline_m", i.heading_baseline_m},
+              {"heading_sigma_rad", i.heading_sigma_rad},
+              {"velocity_sigma_mps", i.velocity_sigma_mps},
+              {"yaw_rate_sigma_radps", i.yaw_rate_sigma_radps},
+              {"acceleration_sigma_mps2", i.acceleration_sigma_mps2},
+              {"gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
+              {"steering_sigma_rad", i.steering_sigma_rad},
+              {"accel_bias_sigma_mps2", i.accel_bias_sigma_mps2}}},
+      {"gps",
+       Object{{"sigma_scale", g.sigma_scale},
+              {"sigma_floor_rtk_fixed_m", g.sigma_floor_rtk_fixed_m},
+              {"sigma_floor_rtk_float_m", g.sigma_floor_rtk_float_m},
+              {"sigma_floor_sbas_m", g.sigma_floor_sbas_m},
+              {"gate_probability", g.gate_probability},
+              {"reacquire_after_s", g.reacquire_after_s},
+              {"estimate_bias", g.estimate_bias},
+              {"bias_sigma_m", g.bias_sigma_m},
+              {"bias_time_constant_s", g.bias_time_constant_s}}},
+      {"imu",
+       Object{{"accel_sigma_mps2", c.imu.accel_sigma_mps2},
+              {"gyro_sigma_radps", c.imu.gyro_sigma_radps},
+              {"gate_probability", c.imu.gate_probability},
+              {"estimate_accel_bias", c.imu.estimate_accel_bias}}},
+      {"wheels",
+       Object{{"speed_sigma_radps", w.speed_sigma_radps},
+              {"speed_sigma_fraction", w.speed_sigma_fraction},
+              {"lateral_velocity_sigma_mps", w.lateral_velocity_sigma_mps},
+              {"gate_probability", w.gate_probability},
+              {"max_speed_radps", w.max_speed_radps},
+              {"encoder_low_pass_time_constant_s", w.encoder_low_pass_time_constant_s},
+              {"angle_measurement", w.angle_measurement},
+              {"angle_sigma_rad", w.angle_sigma_rad},
+              {"angle_rate_noise_radps_per_sqrt_hz", w.angle_rate_noise_radps_per_sqrt_hz},
+              {"angle_max_prediction_sigma_rad", w.angle_max_prediction_sigma_rad},
+              {"speed_update_iterations", w.speed_update_iterations}}},
+      {"steering", Object{{"angle_sigma_rad", c.steering.angle_sigma_rad},
+                          {"gate_probability", c.steering.gate_probability}}},
+      {"vio", Object{{"position_m", {c.vio.position_m.x(), c.vio.position_m.y()}},
+                     {"sigma_scale", c.vio.sigma_scale},
+                     {"gate_probability", c.vio.gate_probability}}},
+      {"map_aided",
+       Object{{"method", std::string(MapAidedMethodName(a.method))},
+              {"range_sigma_m", a.range_sigma_m},
+              {"cone_half_angle_rad", a.cone_half_angle_rad},
+              {"max_range_m", a.max_range_m},
+              {"k_sigma", a.k_sigma},
+              {"row_smoothing_m", a.row_smoothing_m},
+              {"gate_probability", a.gate_probability}}},
+      {"max_prediction_step_s", c.max_prediction_step_s},
+      {"max_prediction_gap_s", c.max_prediction_gap_s},
+      {"max_time_jump_s", c.max_time_jump_s},
+  };
+}
+
+nlohmann::json DefaultsDocument() {
+  return nlohmann::json::parse(ConfigDocument(FilterConfig{}).dump());
+}
+
+/// Runs a reader of configuration layers; its errors become FilterConfigErrors (same message).
+template <typename Read>
+std::vector<mapio::ConfigLayer> Layers(Read&& read) {
+  try {
+    return read();
+  } catch (const mapio::ConfigOverlayError& e) {
+    throw FilterConfigError(e.what());
+  }
+}
+
+/// A filter from its layers (base first): each layer merged alone onto the defaults is read first,
+/// so that an unknown key, a wrong type or a missing name is reported with the file that has it;
+/// then all of them merged in order onto the defaults, whose values are checked (FilterConfigProblem)
+/// and reported with `source`, the file that was asked for.
+FilterConfig ReadLayers(const std::vector<mapio::ConfigLayer>& layers, const std::string& source) {
+  const nlohmann::json defaults = DefaultsDocument();
+  for (const mapio::ConfigLayer& layer : layers) {
+    if (!layer.document.contains("name")) {
+      throw FilterConfigError(layer.file.string() + ": name: missing key (every filter file names itself; "
+                                                    "the keys it leaves out keep their default values)");
+    }
+    if (layers.size() == 1) break;  // read below, with the same name
+    nlohmann::json alone = defaults;
+    mapio::MergeOverlay(alone, layer.document);
+    Reader reader(alone, layer.file.string(), "");
+    (void)ReadConfig(reader);
+  }
+  const nlohmann::json merged = mapio::MergeLayers(defaults, layers);
+  Reader root(merged, source, "");
+  FilterConfig config = ReadConfig(root);
+  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError(source + ": " + *problem);
+  return config;
+}
+
 }  // namespace
+
+std::string FilterConfigJson(const FilterConfig& config) { return ConfigDocument(config).dump(2) + "\n"; }
 
 std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
   if (config.name.empty()) return std::string("name must not be empty");
@@ -280,15 +413,25 @@ double GpsSigma(const GpsNoise& noise, formats::GnssFixQuality fix, double recei
 
 FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name) {
   const std::string source(source_name);
-  const nlohmann::json document = mapio::detail::ParseJsonText<FilterConfigError>(json_text, source);
-  Reader root(document, source, "");
-  FilterConfig config = ReadConfig(root);
-  if (const auto problem = FilterConfigProblem(config)) throw FilterConfigError(source + ": " + *problem);
-  return config;
+  return ReadLayers(Layers([&] { return std::vector{mapio::ParseStandaloneLayer(json_text, source)}; }), source);
+}
+
+FilterConfig ParseFilterConfigFile(std::string_view json_text, const std::filesystem::path& path) {
+  return ReadLayers(Layers([&] { return mapio::ParseConfigLayers(json_text, path.string(), path.parent_path(),
+                                                                 "filter file"); }),
+                    path.string());
 }
 
 FilterConfig LoadFilterConfig(const std::filesystem::path& path) {
-  return ParseFilterConfig(mapio::detail::ReadTextFile<FilterConfigError>(path, "filter file"), path.string());
+  return ReadLayers(Layers([&] { return mapio::ReadConfigLayers(path, "filter file"); }), path.string());
+}
+
+std::vector<std::filesystem::path> FilterConfigFiles(const std::filesystem::path& path) {
+  std::vector<std::filesystem::path> files;
+  for (const mapio::ConfigLayer& layer : Layers([&] { return mapio::ReadConfigLayers(path, "filter file"); })) {
+    files.push_back(layer.file);
+  }
+  return files;
 }
 
 }  // namespace rowloc::localization

@@ -1,10 +1,12 @@
 #include "rowloc/sim/scenario.hpp"
 
+#include "rowloc/mapio/config_overlay.hpp"
 #include "rowloc/mapio/detail/json_object_reader.hpp"
 #include "rowloc/sim/route_builders.hpp"
 #include "rowloc/sim/sensor_config.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -246,18 +248,83 @@ Scenario ParseScenarioObject(Reader reader, const std::filesystem::path& base) {
   return scenario;
 }
 
+/// The keys of a scenario that hold file paths (relative to the file that states them).
+constexpr std::array<const char*, 5> kPathKeys = {"world", "vehicle", "sensor_profiles", "terrains", "filters"};
+
+bool SameDirectory(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code error;
+  const auto canonical = [&error](const std::filesystem::path& p) {
+    return std::filesystem::weakly_canonical(p.empty() ? std::filesystem::path(".") : p, error);
+  };
+  return canonical(a) == canonical(b) && !error;
+}
+
+/// A relative path of a base in another directory, made absolute (normalized) so that it still
+/// names the file the base meant once the base is merged into the extending file.
+void RebasePath(json& value, const std::filesystem::path& directory) {
+  if (!value.is_string() || value.get<std::string>().empty()) return;  // the reader refuses it later
+  const std::filesystem::path path(value.get<std::string>());
+  if (path.is_absolute()) return;
+  std::error_code error;
+  value = std::filesystem::absolute(directory / path, error).lexically_normal().string();
+}
+
+void RebasePaths(json& document, const std::filesystem::path& directory) {
+  for (const char* key : kPathKeys) {
+    const auto it = document.find(key);
+    if (it == document.end()) continue;
+    if (it->is_array()) {
+      for (json& item : *it) RebasePath(item, directory);
+    } else {
+      RebasePath(*it, directory);
+    }
+  }
+}
+
+/// The chain of a scenario merged, base first; the paths of bases in other directories rebased.
+json MergeScenarioLayers(const std::vector<mapio::ConfigLayer>& layers, const std::filesystem::path& directory) {
+  json merged = json::object();
+  for (const mapio::ConfigLayer& layer : layers) {
+    if (&layer == &layers.back() || SameDirectory(layer.file.parent_path(), directory)) {
+      mapio::MergeOverlay(merged, layer.document);
+    } else {
+      json document = layer.document;
+      RebasePaths(document, layer.file.parent_path());
+      mapio::MergeOverlay(merged, document);
+    }
+  }
+  return merged;
+}
+
+/// Runs a reader of scenario layers; its errors become ScenarioErrors (same message).
+template <typename Read>
+json ExpandedDocument(Read&& read, const std::filesystem::path& directory) {
+  try {
+    return MergeScenarioLayers(read(), directory);
+  } catch (const mapio::ConfigOverlayError& e) {
+    throw ScenarioError(e.what());
+  }
+}
+
+json ExpandFile(const std::filesystem::path& path) {
+  return ExpandedDocument([&] { return mapio::ReadConfigLayers(path, "scenario file"); }, path.parent_path());
+}
+
 }  // namespace
 
 Scenario ParseScenario(std::string_view json_text, std::string_view source_name,
                        const std::filesystem::path& base_directory) {
   const std::string source(source_name);
-  const json document = mapio::detail::ParseJsonText<ScenarioError>(json_text, source);
+  const json document = ExpandedDocument(
+      [&] { return mapio::ParseConfigLayers(json_text, source, base_directory, "scenario file"); }, base_directory);
   return ParseScenarioObject(Reader(document, source, ""), base_directory);
 }
 
 Scenario LoadScenario(const std::filesystem::path& path) {
-  const std::string text = mapio::detail::ReadTextFile<ScenarioError>(path, "scenario file");
-  return ParseScenario(text, path.string(), path.parent_path());
+  const json document = ExpandFile(path);
+  return ParseScenarioObject(Reader(document, path.string(), ""), path.parent_path());
 }
+
+std::string ExpandedScenarioJson(const std::filesystem::path& path) { return ExpandFile(path).dump(2) + "\n"; }
 
 }  // namespace rowloc::sim

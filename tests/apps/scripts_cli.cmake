@@ -46,11 +46,18 @@ set(_diff config/scenarios/slip-odometry-loops.json --vehicle config/vehicles/di
 rowloc_script_test(tune_noise_identifies_the_wheel_sigma ON
   "identified: wheels\\.speed_sigma_radps = 0\\.06[0-9]* \\(file: 0\\.1; factor 0\\.6[0-9]*\\).*slip-odometry-loops\\.json \\| 2 \\| 0\\.9[0-9]+ -> [12]\\.[0-9]+ .*identified: NIS per dof (0\\.9[5-9]|1\\.0[0-5])"
   tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2 --low 0.5 --high 0.8
-  --tolerance 0.05)
+  --tolerance 0.05 -o ${CMAKE_CURRENT_BINARY_DIR}/tuned-wheels.json)
+# -o writes an overlay on the defaults: the name and the one key that differs from them, nothing else.
+add_test(NAME scripts.tune_noise_writes_an_overlay
+         COMMAND ${CMAKE_COMMAND} -DFILE=${CMAKE_CURRENT_BINARY_DIR}/tuned-wheels.json
+                 "-DPATTERN=^[{][^,]*\"name\": \"tuned-wheels\",[^,]*\"wheels\": [{][^,]*\"speed_sigma_radps\": 0\\.06[0-9]*[^,]*$"
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/file_contains.cmake)
+set_tests_properties(scripts.tune_noise_identifies_the_wheel_sigma PROPERTIES FIXTURES_SETUP tune_wheels)
+set_tests_properties(scripts.tune_noise_writes_an_overlay PROPERTIES LABELS "apps;sweep" FIXTURES_REQUIRED tune_wheels)
 rowloc_script_test(tune_noise_rejects_an_interval_that_does_not_bracket OFF
   "factor \\[1, 2\\] of wheels\\.speed_sigma_radps does not bracket NIS per dof 1: 0\\.4[0-9]+ at 1"
   tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1 --test 2 --low 1 --high 2)
-rowloc_script_test(tune_noise_rejects_an_absent_key OFF "default\\.json: wheels\\.speed_sigma is not a number > 0"
+rowloc_script_test(tune_noise_rejects_an_absent_key OFF "default\\.json: wheels\\.speed_sigma is not a number > 0 in the filter"
   tune-noise ${_diff} --key wheels.speed_sigma --sensor wheels --train 1 --test 2)
 rowloc_script_test(tune_noise_rejects_overlapping_seeds OFF "--train and --test seeds overlap"
   tune-noise ${_diff} --key wheels.speed_sigma_radps --sensor wheels --train 1-3 --test 3-4)

@@ -113,7 +113,8 @@ TEST(ScenarioTest, WhiteEncoderVariantsChangeOnlyTheEncoder) {
   for (const std::string base :
        {"agrimaro-tiles", "agrimaro-grass", "agrimaro-gravel", "slip-odometry-loops", "slip-odometry-turns"}) {
     SCOPED_TRACE(base);
-    json variant = ShippedJson(base + "-white-encoder");
+    json variant = json::parse(ExpandedScenarioJson(ScenarioDir() / (base + "-white-encoder.json")));
+    EXPECT_EQ(ShippedJson(base + "-white-encoder")["extends"], base + ".json");  // an overlay of its base
     EXPECT_EQ(variant["sensors"]["wheel_encoder"]["profile"], "wheel_encoder_white");
     const Scenario loaded = LoadScenario(ScenarioDir() / (base + "-white-encoder.json"));
     EXPECT_EQ(loaded.wheel_encoder, WhiteWheelEncoderConfig());

@@ -17,11 +17,16 @@
 // Gates are probabilities p: a measurement of dimension m is rejected when its NIS exceeds the
 // chi-square quantile Q(m, p) (the design's "chi-square gating of outliers").
 //
-// File format (config/filters/*.json): every key required, unknown keys rejected, errors name the
-// source, the key path and the reason (the same strict reader as the simulator's files). Every
-// number has a physical domain [min, max] (filter_config.cpp, Rules; docs/localization-filter.md
-// §1.1): a sign check alone let a prediction step of 1e-300 s hang the filter and a sigma of 1e300
-// overflow its covariance.
+// File format (config/filters/*.json; docs/localization-filter.md §3): an overlay on the in-code
+// defaults below (the struct initialisers are the single source of every default). A file lists
+// "name" and only the keys it changes; they are merged key by key onto the defaults
+// (mapio/config_overlay.hpp: objects merge, any other value replaces). A file may name a base
+// filter file with "extends" (a path relative to the file): the base is merged onto the defaults
+// first. Unknown keys are refused, also in an overlay and in its bases (a typo must not fall back
+// silently to a default); errors name the file, the key path and the reason (the same strict reader
+// as the simulator's files). Every number has a physical domain [min, max] (filter_config.cpp,
+// Rules; docs/localization-filter.md §1.1): a sign check alone let a prediction step of 1e-300 s
+// hang the filter and a sigma of 1e300 overflow its covariance.
 #pragma once
 
 #include "rowloc/formats/gnss_fix_quality.hpp"
@@ -33,6 +38,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rowloc::localization {
 
@@ -246,9 +252,23 @@ class FilterConfigError : public std::runtime_error {
 /// Why the configuration is unusable (naming the field), or nullopt.
 std::optional<std::string> FilterConfigProblem(const FilterConfig& config);
 
-/// Parses a filter file's text; source_name appears in the messages. Throws FilterConfigError.
+/// Parses a filter document's text (no file: e.g. a configuration sent to the service inline) onto
+/// the defaults; source_name appears in the messages. "extends" is refused (nothing to resolve it
+/// against). Throws FilterConfigError.
 FilterConfig ParseFilterConfig(std::string_view json_text, std::string_view source_name);
+/// Parses the text of the filter file at `path` (already read by the caller), its "extends"
+/// resolved against the file's directory. Throws FilterConfigError.
+FilterConfig ParseFilterConfigFile(std::string_view json_text, const std::filesystem::path& path);
 /// Reads and parses a filter file. Throws FilterConfigError (including for a missing file).
 FilterConfig LoadFilterConfig(const std::filesystem::path& path);
+/// The files a filter file is read from: its "extends" chain, base first, the file itself last.
+/// Throws FilterConfigError.
+std::vector<std::filesystem::path> FilterConfigFiles(const std::filesystem::path& path);
+
+/// Every value of `config` as a complete filter file: canonical JSON (the file format's keys in
+/// its order, two-space indent, numbers in their shortest round-trip form, a final newline).
+/// Parsing it gives `config` back exactly. `rowloc config show` prints it; the service records
+/// it in a session's journal metadata.
+std::string FilterConfigJson(const FilterConfig& config);
 
 }  // namespace rowloc::localization

@@ -7,6 +7,14 @@
 // unknown keys are rejected, numbers are finite, and every error names the scenario file, the key
 // path and the reason (errors of a referenced file are prefixed with the scenario's key that
 // references it). Paths inside a scenario are relative to the scenario file.
+//
+// A scenario may be a variant of another: "extends": "base.json" (a path relative to the file)
+// reads the base and merges the file onto it key by key (mapio/config_overlay.hpp: objects merge,
+// any other value, arrays and null included, replaces). The file then states only what differs
+// (the `*-white-encoder` whiteness controls: name, description, the wheel encoder's profile and
+// their filter file). Paths a base states keep naming the files the base meant, also when the
+// base lies in another directory. The rules of the merged document are the rules above; its errors
+// name the file that was asked for.
 #pragma once
 
 #include "rowloc/geometry/row_map.hpp"
@@ -94,5 +102,10 @@ Scenario ParseScenario(std::string_view json_text, std::string_view source_name,
                        const std::filesystem::path& base_directory);
 /// Reads and parses a scenario file. Throws ScenarioError (including for a missing file).
 Scenario LoadScenario(const std::filesystem::path& path);
+
+/// The document LoadScenario reads for `path`: the file merged onto the files it extends, as
+/// JSON (two-space indent, keys sorted, a final newline). `rowloc config show --scenario` prints
+/// it. Throws ScenarioError.
+std::string ExpandedScenarioJson(const std::filesystem::path& path);
 
 }  // namespace rowloc::sim
