@@ -36,6 +36,9 @@ std::optional<std::string> ValidateRowMap(const RowMap& map) {
     const std::string where = "row " + std::to_string(r) + " ('" + row.id + "')";
     if (row.id.empty()) return "row " + std::to_string(r) + " has an empty id";
     if (!ids.insert(row.id).second) return where + ": duplicate id";
+    if (!(std::isfinite(row.outline_sigma_m) && row.outline_sigma_m >= 0.0)) {
+      return where + ": outline_sigma_m must be finite and >= 0";
+    }
     const std::size_t min_points = row.closed ? 3 : 2;
     if (row.points_m.size() < min_points) {
       return where + ": needs at least " + std::to_string(min_points) + " vertices, has " +

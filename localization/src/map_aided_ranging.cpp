@@ -271,7 +271,9 @@ std::optional<RangeSlab> HeadingWidenedSlab(const EchoCandidate& candidate, cons
                                             const Eigen::Vector3d& pose, double heading_sigma_rad,
                                             double measured_range_m, const MapAidedConfig& config) {
   const auto slab = [&](double phi) {
-    return MakeRangeSlab(candidate.edge, mount, phi, measured_range_m, config.range_sigma_m, config.k_sigma);
+    // The row's outline accuracy widens the slab as it widens the range method's noise.
+    const double sigma_m = std::hypot(config.range_sigma_m, candidate.map_sigma_m);
+    return MakeRangeSlab(candidate.edge, mount, phi, measured_range_m, sigma_m, config.k_sigma);
   };
   std::optional<RangeSlab> centre = slab(pose.z());
   const std::optional<RangeSlab> plus = slab(pose.z() + kHeadingStepRad);
@@ -302,6 +304,7 @@ RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoot
     : index_(geometry::SegmentIndex::FromRowMap(local_map)),
       shapes_(Shapes(local_map, row_smoothing_m)),
       rows_(local_map.rows) {
+  for (const geometry::Row& row : rows_) max_outline_sigma_m_ = std::max(max_outline_sigma_m_, row.outline_sigma_m);
   MeasureLaneClearances();
 }
 
@@ -346,6 +349,7 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
     if (auto c = Linearize(*hit, entry.segment, shape, pose, mount, at)) {
       const bool sensor_on_left = hit->hit.normal.dot(Eigen::Vector2d(-shape.tangent.y(), shape.tangent.x())) >= 0.0;
       c->lane_clearance_m = sensor_on_left ? shape.left_clearance_m : shape.right_clearance_m;
+      c->map_sigma_m = rows_[entry.row].outline_sigma_m;
       candidates.push_back(*c);
     }
   }
@@ -360,7 +364,8 @@ double RangeNoiseVariance(const EchoCandidate& candidate, const RangeSensorMount
   // (sigma_phi ~ 0.2 rad) from locking the heading on a linearization error.
   const double curvature = mount.lever_arm_m.norm() + candidate.predicted_range_m;
   const double heading_variance = pose_covariance(2, 2);
-  return range_sigma_m * range_sigma_m + 0.5 * curvature * curvature * heading_variance * heading_variance;
+  return range_sigma_m * range_sigma_m + candidate.map_sigma_m * candidate.map_sigma_m +
+         0.5 * curvature * curvature * heading_variance * heading_variance;
 }
 
 double RangeNis(const EchoCandidate& candidate, const RangeSensorMount& mount, double measured_range_m,

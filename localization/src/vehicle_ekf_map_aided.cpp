@@ -59,7 +59,8 @@ ProcessResult VehicleEkf::Apply(const formats::UltrasonicMessage& ping) {
   }
   // Candidates: every surface within k sigma (position and range) of the nearest predicted one.
   const double window_m =
-      config.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config.range_sigma_m);
+      config.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config.range_sigma_m +
+                        ranging_->max_outline_sigma_m());
   const std::vector<EchoCandidate>& candidates =
       ranging_->Candidates(pose, mount, config.max_range_m, window_m, candidate_buffers_);
   if (candidate_buffers_.sensor_inside_outline) {

@@ -274,6 +274,7 @@ class RowMapReader {
     geometry::Row row;
     row.id = ReadId(feature);
     location_ += " (id " + Quoted(row.id) + ")";
+    row.outline_sigma_m = ReadOutlineSigma(*Find(feature, "properties"));
     const Json* geometry = Find(feature, "geometry");
     if (geometry == nullptr || geometry->is_null()) Fail("the feature has no geometry");
     if (!geometry->is_object()) Fail("\"geometry\" must be an object, got " + TypeOf(geometry));
@@ -300,6 +301,15 @@ class RowMapReader {
     if (!id->is_string()) Fail("\"properties\".\"id\" must be a string, got " + TypeOf(id) + " " + id->dump());
     if (id->get_ref<const std::string&>().empty()) Fail("\"properties\".\"id\" is empty");
     return id->get<std::string>();
+  }
+
+  /// The optional "outline_sigma_m" property: a finite number >= 0 (0 when absent).
+  double ReadOutlineSigma(const Json& properties) const {
+    const Json* sigma = Find(properties, "outline_sigma_m");
+    if (sigma == nullptr) return 0.0;
+    const double value = RequireNumber(sigma, "\"properties\".\"outline_sigma_m\"");
+    if (value < 0.0) Fail("\"properties\".\"outline_sigma_m\" must be >= 0, got " + sigma->dump());
+    return value;
   }
 
   std::vector<Eigen::Vector2d> ReadLineString(const Json& coordinates, const LocalFrame& frame) {

@@ -65,7 +65,9 @@ OrderedJson FeatureJson(const geometry::Row& row, const LocalFrame& frame) {
   } else {
     geometry = OrderedJson{{"type", "LineString"}, {"coordinates", positions}};
   }
-  return OrderedJson{{"type", "Feature"}, {"properties", {{"id", row.id}}}, {"geometry", geometry}};
+  OrderedJson properties = {{"id", row.id}};
+  if (row.outline_sigma_m > 0.0) properties["outline_sigma_m"] = row.outline_sigma_m;
+  return OrderedJson{{"type", "Feature"}, {"properties", properties}, {"geometry", geometry}};
 }
 
 }  // namespace

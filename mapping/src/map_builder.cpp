@@ -3,6 +3,7 @@
 
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/output_file.hpp"
+#include "rowloc/geometry/segment2.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapping/canopy_occupancy_map.hpp"
 #include "rowloc/mapping/part_meshes.hpp"
@@ -78,6 +79,31 @@ class TopCells {
   const std::vector<Eigen::Vector2d>& top_m_;
   std::optional<bgi::rtree<std::pair<BoostPoint, std::size_t>, bgi::rstar<16>>> tree_;
 };
+
+/// RMS distance of the points from the closed polygon (every segment tried: a part's traced
+/// outline has ~20 vertices per metre, its simplified polygon ~1-7).
+double RmsDistanceToPolygon(const std::vector<Eigen::Vector2d>& points_m, const std::vector<Eigen::Vector2d>& polygon_m) {
+  if (points_m.empty() || polygon_m.size() < 2) return 0.0;
+  double sum = 0.0;
+  for (const Eigen::Vector2d& p : points_m) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < polygon_m.size(); ++i) {
+      best = std::min(best, geometry::Segment2{polygon_m[i], polygon_m[(i + 1) % polygon_m.size()]}.Distance(p));
+    }
+    sum += best * best;
+  }
+  return std::sqrt(sum / static_cast<double>(points_m.size()));
+}
+
+/// The outline's accuracy across it (geometry::Row::outline_sigma_m), an RMS over the outline: in
+/// quadrature, what the simplification moved the traced outline by (RMS), the noise of the traced
+/// edges (roughness and sampling the outline cannot follow) and, seen from one side, the width
+/// estimate's deviation, which moves the hidden face only (half the outline: weight 1/2).
+double OutlineSigma(const PartOutline& traced, const std::vector<Eigen::Vector2d>& simplified_m) {
+  const double moved = RmsDistanceToPolygon(traced.polygon_m, simplified_m);
+  return std::sqrt(moved * moved + traced.edge_noise_m * traced.edge_noise_m +
+                   0.5 * traced.width_sigma_m * traced.width_sigma_m);
+}
 
 /// Drops vertices closer than 1e-6 m to their predecessor (the GeoJSON writer refuses them).
 std::vector<Eigen::Vector2d> DropRepeated(const std::vector<Eigen::Vector2d>& polygon) {
@@ -255,6 +281,7 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
       report.traced_vertices = outline.polygon_m.size();
       report.simplified = simple.simplified;
       report.one_sided = outline.one_sided;
+      report.outline_sigma_m = OutlineSigma(outline, simple.points_m);
       report.width_m = outline.median_width_m;
       report.width_spread_m = outline.width_spread_m;
       std::vector<Eigen::Vector2d> polygon;
@@ -276,7 +303,7 @@ MapBuildResult BuildRowMap(TiledCloud& tiled, const MapBuildConfig& config, cons
       auto& [report, polygon] = outlines[k];
       report.id = outlines.size() == 1 ? fmt::format("row-{}", row_number)
                                        : fmt::format("row-{}.part-{}", row_number, k + 1);
-      map.rows.push_back(geometry::Row{report.id, std::move(polygon), true});
+      map.rows.push_back(geometry::Row{report.id, std::move(polygon), true, Round(report.outline_sigma_m, 1e-4)});
       result.one_sided_parts += report.one_sided ? 1 : 0;
       result.parts.push_back(report);
     }
@@ -463,7 +490,8 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
                                    {"traced_vertices", p.traced_vertices}, {"vertices", p.vertices},
                                    {"simplified", p.simplified}, {"one_sided", p.one_sided},
                                    {"width_m", Round(p.width_m, 1e-4)},
-                                   {"width_spread_m", Round(p.width_spread_m, 1e-4)}, {"mesh_levels", p.mesh_levels},
+                                   {"width_spread_m", Round(p.width_spread_m, 1e-4)},
+                                   {"outline_sigma_m", Round(p.outline_sigma_m, 1e-4)}, {"mesh_levels", p.mesh_levels},
                                    {"mesh_triangles", p.mesh_triangles}};
     part["mesh_slice_max_m"] = p.mesh_slice_max_m ? nlohmann::ordered_json(Round(*p.mesh_slice_max_m, 1e-4)) : nullptr;
     parts.push_back(std::move(part));
@@ -486,12 +514,12 @@ MapBuildResult RunMapBuild(const MapBuildRequest& request) {
                       request.config.tiles.size_m, request.config.tiles.overlap_m, result.tile_threads,
                       result.largest_tile_points);
   if (!result.parts.empty()) {
-    text += "  part                 points  length [m]  width [m]  traced  vertices  simplified  mesh: levels triangles "
-            "slice-max [m]\n";
+    text += "  part                 points  length [m]  width [m]  sigma [m]  traced  vertices  simplified  mesh: levels "
+            "triangles slice-max [m]\n";
     for (const auto& p : result.parts) {
       const std::string width = p.one_sided ? fmt::format("{:.3f}*", p.width_m) : fmt::format("{:.3f} ", p.width_m);
-      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>9}  {:>6}  {:>8}  {:<10}  {:>12} {:>9} {:>13}\n", p.id, p.points,
-                          p.length_m, width, p.traced_vertices, p.vertices, p.simplified ? "yes" : "no", p.mesh_levels,
+      text += fmt::format("  {:<18} {:>8}  {:>10.2f}  {:>9}  {:>9.4f}  {:>6}  {:>8}  {:<10}  {:>12} {:>9} {:>13}\n", p.id,
+                          p.points, p.length_m, width, p.outline_sigma_m, p.traced_vertices, p.vertices, p.simplified ? "yes" : "no", p.mesh_levels,
                           p.mesh_triangles, p.mesh_slice_max_m ? fmt::format("{:.4f}", *p.mesh_slice_max_m) : "-");
     }
     if (result.one_sided_parts > 0) {

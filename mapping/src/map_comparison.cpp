@@ -47,6 +47,13 @@ double Percentile(std::vector<double> values, double q) {
   return values[index];
 }
 
+double Rms(const std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  double sum = 0.0;
+  for (double v : values) sum += v * v;
+  return std::sqrt(sum / static_cast<double>(values.size()));
+}
+
 std::string BaseId(const std::string& id) {
   const auto dot = id.find(".part-");
   return dot == std::string::npos ? id : id.substr(0, dot);
@@ -134,6 +141,8 @@ MapComparison CompareRowMaps(const geometry::RowMap& built_in, const geometry::R
     PartMatch match;
     match.built_id = built.rows[r].id;
     match.p95_m = Percentile(part_distances[r], 0.95);
+    match.rms_m = Rms(part_distances[r]);
+    match.stated_sigma_m = built.rows[r].outline_sigma_m;
     match.worst_m = worst[r];
     match.max_m = part_distances[r].empty() ? 0.0 : *std::max_element(part_distances[r].begin(), part_distances[r].end());
     const auto best = std::max_element(votes[r].begin(), votes[r].end(),
@@ -166,6 +175,12 @@ MapComparison CompareRowMaps(const geometry::RowMap& built_in, const geometry::R
   result.p95_m = Percentile(all, 0.95);
   result.max_m = *std::max_element(all.begin(), all.end());
   result.built_to_truth_p95_m = Percentile(forward, 0.95);
+  result.built_to_truth_rms_m = Rms(forward);
+  double stated = 0.0;
+  for (std::size_t r = 0; r < built.rows.size(); ++r) {
+    stated += static_cast<double>(part_distances[r].size()) * built.rows[r].outline_sigma_m * built.rows[r].outline_sigma_m;
+  }
+  result.stated_sigma_rms_m = forward.empty() ? 0.0 : std::sqrt(stated / static_cast<double>(forward.size()));
   result.truth_to_built_p95_m = Percentile(backward, 0.95);
   return result;
 }
@@ -174,15 +189,15 @@ std::string FormatMapComparison(const MapComparison& c) {
   std::string text = fmt::format(
       "rows: true {}, found {}; parts: true {}, built {}, found {}; missed: {}; invented: {}\n"
       "distance (both directions, {} samples): p95 {:.4f} m, max {:.4f} m (built->true p95 {:.4f} m, "
-      "true->built p95 {:.4f} m)\n",
+      "true->built p95 {:.4f} m)\nbuilt->true rms {:.4f} m; the built map's outline_sigma_m, rms {:.4f} m\n",
       c.truth_rows, c.truth_rows_found, c.truth_parts, c.built_parts, c.truth_parts_found,
       c.missed.empty() ? "none" : fmt::format("{}", fmt::join(c.missed, ", ")),
       c.invented.empty() ? "none" : fmt::format("{}", fmt::join(c.invented, ", ")), c.samples, c.p95_m, c.max_m,
-      c.built_to_truth_p95_m, c.truth_to_built_p95_m);
+      c.built_to_truth_p95_m, c.truth_to_built_p95_m, c.built_to_truth_rms_m, c.stated_sigma_rms_m);
   for (const auto& m : c.matches) {
-    text += fmt::format("  {:<18} -> {:<18} p95 {:.4f} m, max {:.4f} m at ({:.2f}, {:.2f})\n", m.built_id,
-                        m.truth_id.empty() ? "(invented)" : m.truth_id, m.p95_m, m.max_m, m.worst_m.x(),
-                        m.worst_m.y());
+    text += fmt::format("  {:<18} -> {:<18} p95 {:.4f} m, max {:.4f} m at ({:.2f}, {:.2f}), rms {:.4f} m (stated {:.4f} m)\n",
+                        m.built_id, m.truth_id.empty() ? "(invented)" : m.truth_id, m.p95_m, m.max_m, m.worst_m.x(),
+                        m.worst_m.y(), m.rms_m, m.stated_sigma_m);
   }
   return text;
 }
@@ -201,9 +216,12 @@ std::string FormatMapComparisonJson(const MapComparison& c) {
   j["max_m"] = c.max_m;
   j["built_to_truth_p95_m"] = c.built_to_truth_p95_m;
   j["truth_to_built_p95_m"] = c.truth_to_built_p95_m;
+  j["built_to_truth_rms_m"] = c.built_to_truth_rms_m;
+  j["stated_sigma_rms_m"] = c.stated_sigma_rms_m;
   nlohmann::ordered_json parts = nlohmann::ordered_json::array();
   for (const auto& m : c.matches) {
-    parts.push_back({{"built_id", m.built_id}, {"truth_id", m.truth_id}, {"p95_m", m.p95_m}, {"max_m", m.max_m}});
+    parts.push_back({{"built_id", m.built_id}, {"truth_id", m.truth_id}, {"p95_m", m.p95_m}, {"max_m", m.max_m},
+                     {"rms_m", m.rms_m}, {"stated_sigma_m", m.stated_sigma_m}});
   }
   j["parts"] = std::move(parts);
   return j.dump(2) + "\n";

@@ -60,7 +60,7 @@ std::vector<PartMesh> BuildPartMeshes(const RowDetection& detection,
         if (row.points_m.size() >= 2) cut.rows.push_back(std::move(row));
       }
       geometry::RowMap outline;
-      outline.rows.push_back(geometry::Row{"outline", outlines_m[part], true});
+      outline.rows.push_back(geometry::Row{"outline", outlines_m[part], true, 0.0});
       if (!cut.rows.empty()) out.slice_max_m = LargestDistanceToOutlines(cut, outline, 0.01);
     }
   }

@@ -13,7 +13,7 @@ namespace {
 
 /// > 0 for a counter-clockwise ring (geometry::OutlineSignedArea, Boost.Geometry).
 double SignedArea(const std::vector<Eigen::Vector2d>& ring) {
-  return geometry::OutlineSignedArea(geometry::Row{"", ring, true});
+  return geometry::OutlineSignedArea(geometry::Row{"", ring, true, 0.0});
 }
 
 std::size_t NearestVertex(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vector2d& to) {

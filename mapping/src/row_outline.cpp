@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -339,6 +340,24 @@ double ContiguousReach(std::vector<double>& d) {
   return reach;
 }
 
+/// The noise left in the outline by the per-station edge estimates, estimated from the raw
+/// estimates (before their median of three): 1.4826 MAD of their second differences
+/// e_k - (e_{k-1} + e_{k+1}) / 2 over every edge given, / sqrt(1.5) (the second difference of white
+/// noise of variance s^2 has variance 1.5 s^2; a smooth edge's curvature is negligible at 5 cm
+/// stations), times 0.67 (the standard deviation of the median of three normal samples is
+/// 0.670 s). 0 with fewer than three stations.
+double EdgeNoise(std::initializer_list<const std::vector<double>*> edges) {
+  std::vector<double> d;
+  for (const std::vector<double>* e : edges) {
+    for (std::size_t k = 1; k + 1 < e->size(); ++k) d.push_back((*e)[k] - 0.5 * ((*e)[k - 1] + (*e)[k + 1]));
+  }
+  if (d.empty()) return 0.0;
+  const double median = Quantile(d, 0.5);
+  for (double& v : d) v = std::abs(v - median);
+  constexpr double kMedianOfThree = 0.670;
+  return kMedianOfThree * 1.4826 * Quantile(d, 0.5) / std::sqrt(1.5);
+}
+
 void CheckParams(const OutlineParams& params) {
   if (!(params.centreline_bin_m > 0.0) || !(params.station_step_m > 0.0) ||
       !(params.edge_quantile >= 0.0 && params.edge_quantile <= 1.0) || !(params.end_exclusion_m >= 0.0) ||
@@ -378,6 +397,7 @@ PartOutline TraceOutline(const std::vector<Eigen::Vector2d>& points_m, const Out
     if (!right[k].empty()) right_edge[k] = Quantile(right[k], params.edge_quantile);
   }
   if (!FillGaps(left_edge) || !FillGaps(right_edge)) return outline;
+  outline.edge_noise_m = EdgeNoise({&left_edge, &right_edge});
   left_edge = MedianOfThree(left_edge);
   right_edge = MedianOfThree(right_edge);
   std::vector<double> widths(bins.count);
@@ -431,6 +451,7 @@ PartOutline TraceOneSidedOutline(const std::vector<Eigen::Vector2d>& face_m, con
     if (!face_offsets[k].empty()) face[k] = Quantile(face_offsets[k], 0.5);
   }
   if (!FillGaps(face)) return outline;
+  const double face_noise_m = EdgeNoise({&face});
   face = MedianOfThree(face);
 
   // The top's cells by station bin, as distances from the face (> 0: to the face's left).
@@ -448,6 +469,7 @@ PartOutline TraceOneSidedOutline(const std::vector<Eigen::Vector2d>& face_m, con
   const auto half_window = static_cast<std::size_t>(std::ceil(0.5 * params.one_sided_window_m / bins.step));
   std::vector<double> width[2] = {std::vector<double>(bins.count, nan), std::vector<double>(bins.count, nan)};
   std::size_t cells[2] = {0, 0};
+  std::vector<double> window_cells[2];  // cells per measured window
   for (std::size_t k = 0; k < bins.count; ++k) {
     const std::size_t first = k > half_window ? k - half_window : 0;
     const std::size_t last = std::min(bins.count - 1, k + half_window);
@@ -462,7 +484,10 @@ PartOutline TraceOneSidedOutline(const std::vector<Eigen::Vector2d>& face_m, con
       const double reach = ContiguousReach(window);
       std::erase_if(window, [&](double d) { return d > reach; });
       cells[i] += window.size();
-      if (window.size() >= kMinTopCells) width[i][k] = std::max(0.0, Quantile(window, kTopQuantile)) / kTopQuantile;
+      if (window.size() >= kMinTopCells) {
+        width[i][k] = std::max(0.0, Quantile(window, kTopQuantile)) / kTopQuantile;
+        window_cells[i].push_back(static_cast<double>(window.size()));
+      }
     }
   }
   const int canopy_side = cells[0] >= cells[1] ? 0 : 1;
@@ -476,6 +501,12 @@ PartOutline TraceOneSidedOutline(const std::vector<Eigen::Vector2d>& face_m, con
   outline.median_width_m = Quantile(sorted, 0.5);
   sorted = w;
   outline.width_spread_m = 0.5 * (Quantile(sorted, 0.75) - Quantile(sorted, 0.25)) / 0.6745;
+  // The quantile of n points spread evenly over [0, W] has the standard deviation
+  // W sqrt(q (1 - q) / n); n: the median window.
+  const double n = window_cells[canopy_side].empty() ? 0.0 : Quantile(window_cells[canopy_side], 0.5);
+  outline.width_sigma_m =
+      n > 0.0 ? outline.median_width_m * std::sqrt(kTopQuantile * (1.0 - kTopQuantile) / n) / kTopQuantile : 0.0;
+  outline.edge_noise_m = face_noise_m;
   if (outline.median_width_m < params.min_width_m) return outline;
 
   std::vector<double> left_edge(bins.count);

@@ -22,8 +22,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 RowMap ValidMap() {
   RowMap map;
   map.origin = GeoOrigin{45.0, 7.0, 200.0};
-  map.rows.push_back(Row{"open", {{0.0, 0.0}, {10.0, 0.0}}, false});
-  map.rows.push_back(Row{"triangle", {{0.0, 2.0}, {1.0, 2.0}, {0.0, 3.0}}, true});
+  map.rows.push_back(Row{"open", {{0.0, 0.0}, {10.0, 0.0}}, false, 0.0});
+  map.rows.push_back(Row{"triangle", {{0.0, 2.0}, {1.0, 2.0}, {0.0, 3.0}}, true, 0.0});
   return map;
 }
 

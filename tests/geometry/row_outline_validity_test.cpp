@@ -14,7 +14,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-Row MakeRow(std::vector<Eigen::Vector2d> points, bool closed) { return Row{"r", std::move(points), closed}; }
+Row MakeRow(std::vector<Eigen::Vector2d> points, bool closed) { return Row{"r", std::move(points), closed, 0.0}; }
 
 TEST(RowOutlineDefect, ValidRingsOfEitherOrientationPass) {
   Row square = MakeRow({{0, 0}, {1, 0}, {1, 1}, {0, 1}}, true);

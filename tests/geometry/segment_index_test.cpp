@@ -437,8 +437,8 @@ TEST(SegmentIndex, DuplicateSegmentsReportTheLowerEntry) {
 
 TEST(SegmentIndex, FromRowMapNumbersRowsAndSegments) {
   RowMap map;
-  map.rows.push_back(Row{"a", {{0.0, 0.0}, {1.0, 0.0}, {2.0, 0.0}}, false});
-  map.rows.push_back(Row{"b", {{0.0, 2.0}, {1.0, 2.0}, {1.0, 3.0}}, true});
+  map.rows.push_back(Row{"a", {{0.0, 0.0}, {1.0, 0.0}, {2.0, 0.0}}, false, 0.0});
+  map.rows.push_back(Row{"b", {{0.0, 2.0}, {1.0, 2.0}, {1.0, 3.0}}, true, 0.0});
   const SegmentIndex index = SegmentIndex::FromRowMap(map);
   ASSERT_EQ(index.size(), 5u);
   EXPECT_EQ(index.entries()[1].row, 0u);
@@ -468,7 +468,7 @@ TEST(SegmentIndex, LongWallOfShortSegmentsMatchesAnalyticConeRange) {
 
 TEST(SegmentIndex, ConeCastAllAtAPolygonCornerReturnsBothSegments) {
   RowMap map;
-  map.rows.push_back(Row{"square", {{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}}, true});
+  map.rows.push_back(Row{"square", {{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}}, true, 0.0});
   const SegmentIndex index = SegmentIndex::FromRowMap(map);
   const auto all = index.ConeCastAll(Cone2{{2.0, 2.0}, {-1.0, -1.0}, Deg(7.5), 2.0});
   ASSERT_EQ(all.size(), 2u);

@@ -513,5 +513,33 @@ TEST(MapAidedMeasurement, RangeMethodAndNisMatchHandValues) {
   EXPECT_NEAR(m.noise(0, 0), 9e-6 + 0.5 * std::pow(std::sqrt(0.8125) + 0.75, 2) * 0.0004 * 0.0004, 1e-18);
 }
 
+TEST(MapAidedMeasurement, TheRowsOutlineAccuracyAddsToTheRangeNoiseAndWidensTheSlab) {
+  // The same row with outline_sigma_m 4 mm: the candidate carries it, R grows by its square, the
+  // cut's slab by k sqrt(sigma^2 + sigma_map^2) instead of k sigma.
+  geometry::Row row = MakeRow("r", {{-10.0, 0.0}, {10.0, 0.0}});
+  row.outline_sigma_m = 0.004;
+  const RowMapRanging ranging = MakeRanging({row});
+  EXPECT_EQ(ranging.max_outline_sigma_m(), 0.004);
+  const CutSetup exact;
+  const Eigen::Vector3d pose = exact.pose;
+  const EchoCandidate candidate = ranging.Candidates(pose, exact.mount, kMaxRange, 0.0).at(0);
+  EXPECT_EQ(candidate.map_sigma_m, 0.004);
+  EXPECT_EQ(exact.candidate.map_sigma_m, 0.0);
+  const Eigen::Matrix3d P = Eigen::Vector3d(0.01, 0.01, 1e-8).asDiagonal();
+  EXPECT_NEAR(RangeNoiseVariance(candidate, exact.mount, P, 0.003) -
+                  RangeNoiseVariance(exact.candidate, exact.mount, P, 0.003),
+              0.004 * 0.004, 1e-15);
+  const auto ranged = MakeMapAidedMeasurement(candidate, exact.mount, pose, P, 0.78, Config(MapAidedMethod::kRange));
+  EXPECT_NEAR(ranged.noise(0, 0), RangeNoiseVariance(candidate, exact.mount, P, 0.003), 1e-18);
+  // Deprior: the information the slab adds is smaller with the map's sigma (a wider slab).
+  const auto with_map =
+      MakeMapAidedMeasurement(candidate, exact.mount, pose, P, 0.78, Config(MapAidedMethod::kEllipsoidCutDeprior));
+  const auto without =
+      MakeMapAidedMeasurement(exact.candidate, exact.mount, pose, P, 0.78, Config(MapAidedMethod::kEllipsoidCutDeprior));
+  ASSERT_EQ(with_map.cut_status, geometry::CutStatus::kUpdated);
+  ASSERT_EQ(without.cut_status, geometry::CutStatus::kUpdated);
+  EXPECT_GT(with_map.noise(0, 0), without.noise(0, 0));
+}
+
 }  // namespace
 }  // namespace rowloc::localization

@@ -258,6 +258,19 @@ TEST(RowMapGeoJsonRead, MissingId) {
               "feature 0", "no \"properties\"");
 }
 
+TEST(RowMapGeoJsonRead, OutlineSigmaIsOptionalFiniteAndNonNegative) {
+  const auto with_sigma = [](const std::string& sigma_json) {
+    return Collection(R"({"type": "Feature", "properties": {"id": "r", "outline_sigma_m": )" + sigma_json +
+                      R"(}, "geometry": {"type": "LineString", "coordinates": [[7, 45], [7, 46]]}})");
+  };
+  EXPECT_DOUBLE_EQ(ParseRowMapGeoJson(with_sigma("0.004"), "test.geojson").rows[0].outline_sigma_m, 0.004);
+  EXPECT_DOUBLE_EQ(ParseRowMapGeoJson(Collection(kGoodLine), "test.geojson").rows[0].outline_sigma_m, 0.0);
+  ExpectError(with_sigma("-0.01"), "feature 0 (id 'r')", "\"outline_sigma_m\" must be >= 0, got -0.01");
+  ExpectError(with_sigma("\"1 cm\""), "feature 0 (id 'r')", "\"outline_sigma_m\" must be a number, got string");
+  ExpectError(with_sigma("null"), "feature 0 (id 'r')", "\"outline_sigma_m\" must be a number");
+  ExpectError(with_sigma("1e400"), "JSON value /features/0/properties/outline_sigma_m", "number overflow");
+}
+
 TEST(RowMapGeoJsonRead, NonStringId) {
   ExpectError(Collection(Feature("12", R"({"type": "LineString", "coordinates": [[7, 45], [7, 46]]})")), "feature 0",
               "\"properties\".\"id\" must be a string, got number 12");
@@ -341,7 +354,11 @@ TEST(RowMapGeoJsonRead, VertexCountsHaveALimit) {
   // Eleven rows of 10^5 vertices: more than 10^6 in all.
   std::string rows;
   const std::string row_coordinates = coordinates.substr(0, coordinates.rfind(", [")) + "]";  // 10^5 vertices
-  for (int r = 0; r < 11; ++r) rows += (r ? ", " : "") + Line("r" + std::to_string(r), row_coordinates);
+  for (int r = 0; r < 11; ++r) {
+    std::string id = "r";  // (not "r" + std::to_string(r): GCC 12's false -Wrestrict)
+    id += std::to_string(r);
+    rows += (r ? ", " : "") + Line(id, row_coordinates);
+  }
   ExpectError(Collection(rows), "feature 10 (id 'r10')", "the map has more than the limit of 1000000 vertices in all");
 }
 

@@ -10,6 +10,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <system_error>
@@ -50,15 +51,30 @@ RowMap WriteAndRead(const RowMap& map) {
 RowMap AxisAlignedMap() {
   RowMap map;
   map.origin = GeoOrigin{-33.9, 18.4, 60.0};
-  map.rows.push_back(Row{"along-x", {{0.0, 0.0}, {50.0, 0.0}, {100.0, 0.0}}, false});
-  map.rows.push_back(Row{"along-y", {{2.5, 0.0}, {2.5, 50.0}, {2.5, 100.0}}, false});
-  map.rows.push_back(Row{"square", {{5.0, 0.0}, {6.0, 0.0}, {6.0, 1.0}, {5.0, 1.0}}, true});
+  map.rows.push_back(Row{"along-x", {{0.0, 0.0}, {50.0, 0.0}, {100.0, 0.0}}, false, 0.0});
+  map.rows.push_back(Row{"along-y", {{2.5, 0.0}, {2.5, 50.0}, {2.5, 100.0}}, false, 0.0});
+  map.rows.push_back(Row{"square", {{5.0, 0.0}, {6.0, 0.0}, {6.0, 1.0}, {5.0, 1.0}}, true, 0.0});
   return map;
 }
 
 TEST(RowMapGeoJsonWrite, SampleMapRoundTrip) {
   const RowMap map = geometry::MakeSampleRowMap(geometry::SampleRowMapParams{});
   ExpectSameMap(map, WriteAndRead(map));
+}
+
+TEST(RowMapGeoJsonWrite, OutlineSigmaRoundTripsAndIsOnlyWrittenWhenSet) {
+  RowMap map = AxisAlignedMap();
+  map.rows[2].outline_sigma_m = 0.0042;
+  const RowMap read = WriteAndRead(map);
+  EXPECT_EQ(read.rows[0].outline_sigma_m, 0.0);
+  EXPECT_EQ(read.rows[2].outline_sigma_m, 0.0042);
+  const std::string text = FormatRowMapGeoJson(map);
+  EXPECT_EQ(text.find("outline_sigma_m"), text.rfind("outline_sigma_m"));  // once: the square's
+  EXPECT_NE(text.find(R"("outline_sigma_m":0.0042)"), std::string::npos) << text;
+  map.rows[0].outline_sigma_m = -1.0;
+  EXPECT_THROW(FormatRowMapGeoJson(map), std::invalid_argument);
+  map.rows[0].outline_sigma_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(FormatRowMapGeoJson(map), std::invalid_argument);
 }
 
 TEST(RowMapGeoJsonWrite, AxisAlignedRowsRoundTrip) {

@@ -44,7 +44,7 @@ geometry::RowMap TrueMap(const test::SyntheticField& field) {
     map.rows.push_back(geometry::Row{id,
                                      {{r.x0, r.y - r.half_width}, {r.x1, r.y - r.half_width},
                                       {r.x1, r.y + r.half_width}, {r.x0, r.y + r.half_width}},
-                                     true});
+                                     true, 0.0});
   }
   return map;
 }
@@ -79,6 +79,32 @@ TEST(MapBuilderTest, RowsOverASlopedFieldMatchTheTruth) {
   ASSERT_GE(result.stages.size(), 8U);
   EXPECT_EQ(result.stages.front().name, "tiles: steps 1-3");
   EXPECT_EQ(result.stages[1].name, "clean: voxel downsampling");
+}
+
+TEST(MapBuilderTest, EachPartStatesItsOutlinesAccuracy) {
+  // Each part states its outline's accuracy in the map (outline_sigma_m, which the filter adds to
+  // the range noise): about zero on clean faces, grows with leafy ones, of the order of the error
+  // measured against the truth, and the same in the report.
+  double previous = -1.0;
+  for (const double roughness : {0.0, 0.01, 0.03}) {
+    SCOPED_TRACE(roughness);
+    test::SyntheticField field = SlopedField();
+    field.face_roughness_m = roughness;
+    const MapBuildResult result = BuildRowMap(field.Cloud(), MapBuildConfig{}, Georeference::Local(kOrigin));
+    ASSERT_TRUE(result.map.has_value()) << result.message;
+    ASSERT_EQ(result.parts.size(), result.map->rows.size());
+    for (std::size_t i = 0; i < result.parts.size(); ++i) {
+      EXPECT_LT(result.map->rows[i].outline_sigma_m, std::max(0.002, roughness));
+      EXPECT_NEAR(result.map->rows[i].outline_sigma_m, result.parts[i].outline_sigma_m, 1e-4);
+    }
+    const MapComparison c = CompareRowMaps(*result.map, TrueMap(field));
+    EXPECT_GT(c.stated_sigma_rms_m, previous);
+    previous = c.stated_sigma_rms_m;
+    if (roughness > 0.0) {
+      EXPECT_GT(c.stated_sigma_rms_m, 0.5 * c.built_to_truth_rms_m);
+      EXPECT_LT(c.stated_sigma_rms_m, 2.0 * c.built_to_truth_rms_m);
+    }
+  }
 }
 
 TEST(MapBuilderTest, UtmCloudGivesTheSameMapAsTheLocalOne) {

@@ -14,7 +14,7 @@ namespace {
 
 double WorstDistance(const std::vector<Eigen::Vector2d>& polygon, const std::vector<Eigen::Vector2d>& points) {
   geometry::RowMap map;
-  map.rows.push_back(geometry::Row{"r", polygon, true});
+  map.rows.push_back(geometry::Row{"r", polygon, true, 0.0});
   const auto index = geometry::SegmentIndex::FromRowMap(map);
   double worst = 0.0;
   for (const auto& p : points) worst = std::max(worst, index.Nearest(p, 1).front().first);

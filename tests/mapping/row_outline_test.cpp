@@ -18,7 +18,7 @@ namespace {
 /// Largest distance of any point of `points` from the closed polygon.
 double WorstDistance(const std::vector<Eigen::Vector2d>& polygon, const std::vector<Eigen::Vector2d>& points) {
   geometry::RowMap map;
-  map.rows.push_back(geometry::Row{"r", polygon, true});
+  map.rows.push_back(geometry::Row{"r", polygon, true, 0.0});
   const auto index = geometry::SegmentIndex::FromRowMap(map);
   double worst = 0.0;
   for (const auto& p : points) worst = std::max(worst, index.Nearest(p, 1).front().first);
@@ -45,12 +45,48 @@ TEST(RowOutlineTest, BoxRowGivesItsRectangle) {
   const PartOutline outline = TraceOutline(points, OutlineParams{});
   ASSERT_GE(outline.polygon_m.size(), 4U);
   EXPECT_NEAR(outline.length_m, 10.0, 0.03);
-  EXPECT_GT(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true}), 0.0);  // counter-clockwise
-  EXPECT_NEAR(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true}), 6.0, 0.1);
+  EXPECT_GT(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true, 0.0}), 0.0);  // counter-clockwise
+  EXPECT_NEAR(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true, 0.0}), 6.0, 0.1);
   // Every vertex within 1.5 cm of the true rectangle, and the rectangle's corners within 2 cm.
   const std::vector<Eigen::Vector2d> rectangle = {{2, -0.3}, {12, -0.3}, {12, 0.3}, {2, 0.3}};
   EXPECT_LT(WorstDistance(rectangle, outline.polygon_m), 0.015);
   EXPECT_LT(WorstDistance(outline.polygon_m, rectangle), 0.02);
+}
+
+/// A 10 m row whose faces at +-0.3 m move by a random offset of `station_sigma_m` per 5 cm of
+/// length (a leafy canopy), 12 points per station and face with 2 mm noise.
+std::vector<Eigen::Vector2d> RoughRow(double station_sigma_m, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> offset(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  std::vector<Eigen::Vector2d> points;
+  for (double x = 2.0; x <= 12.0; x += 0.05) {
+    const double left = 0.3 + station_sigma_m * offset(rng);
+    const double right = -0.3 + station_sigma_m * offset(rng);
+    for (int h = 0; h < 12; ++h) {
+      points.emplace_back(x + 0.004 * h, left + noise(rng));
+      points.emplace_back(x + 0.004 * h, right + noise(rng));
+    }
+  }
+  return points;
+}
+
+TEST(RowOutlineTest, TheEdgeNoiseGrowsWithTheCanopysRoughness) {
+  // Smooth faces: the edges' estimates scatter by about a millimetre. Rough faces: the estimate
+  // is the roughness that the median of three stations leaves (0.67 of it).
+  const double smooth = TraceOutline(RoughRow(0.0, 3), OutlineParams{}).edge_noise_m;
+  EXPECT_LT(smooth, 0.0015);
+  double previous = smooth;
+  for (const double sigma : {0.01, 0.02, 0.04}) {
+    const PartOutline outline = TraceOutline(RoughRow(sigma, 5), OutlineParams{});
+    ASSERT_FALSE(outline.polygon_m.empty());
+    EXPECT_GT(outline.edge_noise_m, 0.55 * sigma) << sigma;
+    EXPECT_LT(outline.edge_noise_m, 0.8 * sigma) << sigma;
+    EXPECT_GT(outline.edge_noise_m, previous);
+    previous = outline.edge_noise_m;
+    EXPECT_FALSE(outline.one_sided);
+    EXPECT_EQ(outline.width_sigma_m, 0.0);  // both faces seen: the width is measured, not inferred
+  }
 }
 
 TEST(RowOutlineTest, ArcRowFollowsTheCurve) {
@@ -127,8 +163,11 @@ TEST(RowOneSidedOutlineTest, TheHiddenFaceComesFromTheTopOnEitherSide) {
     EXPECT_TRUE(outline.one_sided);
     EXPECT_NEAR(outline.median_width_m, 0.6, 0.02);
     EXPECT_LT(outline.width_spread_m, 0.02);
+    // The width is inferred from the top's points: its stated sigma is positive and small.
+    EXPECT_GT(outline.width_sigma_m, 0.0);
+    EXPECT_LT(outline.width_sigma_m, 0.02);
     EXPECT_NEAR(outline.length_m, 10.0, 0.03);
-    EXPECT_NEAR(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true}), 6.0, 0.15);
+    EXPECT_NEAR(geometry::OutlineSignedArea(geometry::Row{"r", outline.polygon_m, true, 0.0}), 6.0, 0.15);
     EXPECT_LT(WorstDistance(rectangle, outline.polygon_m), 0.025);
     EXPECT_LT(WorstDistance(outline.polygon_m, rectangle), 0.03);
   }

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <cmath>
+#include <random>
 #include <vector>
 
 namespace rowloc::test {
@@ -30,6 +31,9 @@ struct SyntheticField {
   double ground_margin = 1.5;  ///< ground sampled this far around the rows
   bool ground = true;
   bool one_sided = false;   ///< leave out the faces at y + half_width (a scan from one side)
+  /// Leafy faces: each face's column of points at one x is moved across the row by a normal
+  /// offset of this standard deviation (seeded: the same field gives the same cloud).
+  double face_roughness_m = 0.0;
 
   double Ground(double x, double y) const { return grade_x * x + grade_y * y + z0; }
 
@@ -44,11 +48,15 @@ struct SyntheticField {
     mapping::PointCloud cloud;
     auto add = [&](double x, double y, double h) { cloud.points_m.emplace_back(x, y, Ground(x, y) + h); };
     const double s = spacing;
+    std::mt19937_64 rng(17);
+    std::normal_distribution<double> leaf(0.0, 1.0);
     for (const BoxRow& r : rows) {
       for (double x = r.x0; x <= r.x1 + 1e-9; x += s) {
+        const double out_right = face_roughness_m * leaf(rng);
+        const double out_left = face_roughness_m * leaf(rng);
         for (double h = bottom; h <= top + 1e-9; h += s) {
-          add(x, r.y - r.half_width, h);
-          if (!one_sided) add(x, r.y + r.half_width, h);
+          add(x, r.y - r.half_width - out_right, h);
+          if (!one_sided) add(x, r.y + r.half_width + out_left, h);
         }
         for (double y = r.y - r.half_width + s; y < r.y + r.half_width - 1e-9; y += s) add(x, y, top);
       }

@@ -27,6 +27,10 @@ struct Row {
   std::string id;                        ///< unique, non-empty identifier
   std::vector<Eigen::Vector2d> points_m; ///< vertices in local ENU metres, >= 2 (>= 3 if closed)
   bool closed = false;                   ///< true: polygon (last vertex joins the first)
+  /// Accuracy of the outline across it, m (1 sigma of its distance from the canopy surface it
+  /// stands for, as its map build estimated it); 0: exact or unknown. The map-aided update adds
+  /// it to the range noise of echoes from this row.
+  double outline_sigma_m = 0.0;
 
   /// Number of segments: n-1 for a polyline, n for a polygon.
   std::size_t SegmentCount() const {
@@ -52,7 +56,8 @@ struct RowMap {
 };
 
 /// Why a row map is not usable; empty if it is. Checks: at least one row, non-empty unique ids,
-/// >= 2 vertices (>= 3 when closed), finite coordinates, no zero-length segment, origin in range.
+/// >= 2 vertices (>= 3 when closed), finite coordinates, no zero-length segment, origin in range,
+/// outline_sigma_m finite and >= 0.
 /// Not checked: self-intersecting or zero-area polygons (they are still usable as sets of
 /// reflecting segments, which is all that localization needs).
 std::optional<std::string> ValidateRowMap(const RowMap& map);

@@ -45,10 +45,13 @@
 //    right one; below c / 2 the right row is the nearer hypothesis.
 //
 // Methods (docs/map-aided-update.md, steps 3-4):
-// - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2 + (|l| + r)^2 sigma_phi^4 / 2 (the
-//   second-order heading term: it keeps the first echoes after initialisation, sigma_phi ~ 0.2 rad,
-//   from locking the heading on a linearization error). The consistent method.
-// - ellipsoid_cut (Donati 2021 ch. 4): the slab d_m +- k sigma (range_slab.hpp: beam/normal angle,
+// - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2 + sigma_map^2 + (|l| + r)^2
+//   sigma_phi^4 / 2 (sigma_map: the accuracy of the row's outline, which a built map carries in
+//   its file, geometry::Row::outline_sigma_m; a map treated as exact made the filter certain to a
+//   millimetre against outlines a centimetre off, and gate out the echoes that disagree. The last
+//   term is the second-order heading term: it keeps the first echoes after initialisation,
+//   sigma_phi ~ 0.2 rad, from locking the heading on a linearization error). The consistent method.
+// - ellipsoid_cut (Donati 2021 ch. 4): the slab d_m +- k sqrt(sigma^2 + sigma_map^2) (range_slab.hpp: beam/normal angle,
 //   cone, lever arm) widened by k sigma_phi |d beta/d phi| for the heading uncertainty, cuts the
 //   k-sigma position ellipse E(p, k^2 P_pp) (geometry::ParallelCut); the new centre c+ is a
 //   position measurement with covariance P+/k^2 (H = [I 0]). Built from the prior, it counts the
@@ -90,6 +93,9 @@ struct EchoCandidate {
   /// Free distance from the candidate's segment, on the sensor's side, to the nearest segment of
   /// another row (+inf: none within kLaneClearanceSearchM); the lane check's scale.
   double lane_clearance_m = std::numeric_limits<double>::infinity();
+  /// The accuracy of the candidate's row outline (geometry::Row::outline_sigma_m), m: added to the
+  /// range noise in quadrature.
+  double map_sigma_m = 0.0;
 };
 
 /// How far the lane clearance of a segment is searched, m; a clearance beyond it is +inf.
@@ -106,6 +112,8 @@ class RowMapRanging {
   RowMapRanging(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin, double row_smoothing_m);
 
   const geometry::SegmentIndex& index() const { return index_; }
+  /// The largest outline_sigma_m of the map's rows, m (the candidate window's margin).
+  double max_outline_sigma_m() const { return max_outline_sigma_m_; }
 
   /// The smoothed shape of the outline around one segment (per SegmentIndex entry).
   struct EntryShape {
@@ -154,6 +162,7 @@ class RowMapRanging {
   geometry::SegmentIndex index_;
   std::vector<EntryShape> shapes_;  ///< per index entry
   std::vector<geometry::Row> rows_;  ///< the rows in the filter frame (the inside-an-outline test)
+  double max_outline_sigma_m_ = 0.0;
 };
 
 /// The filter measurement of one echo, in the pose (X, Y, phi) of the state. At most 2 rows: the
@@ -165,8 +174,9 @@ struct MapAidedMeasurement {
   geometry::CutStatus cut_status = geometry::CutStatus::kUpdated;  ///< cut methods; kUpdated for range
 };
 
-/// Variance of a range against the map for the range method: sigma^2 + (|l| + r)^2 sigma_phi^4 / 2
-/// (the second-order heading term of the range; see the header comment).
+/// Variance of a range against the map for the range method: sigma^2 + sigma_map^2 + (|l| + r)^2
+/// sigma_phi^4 / 2 (sigma_map: the row's outline accuracy, candidate.map_sigma_m; the last term is
+/// the second-order heading term of the range; see the header comment).
 double RangeNoiseVariance(const EchoCandidate& candidate, const RangeSensorMount& mount,
                           const Eigen::Matrix3d& pose_covariance, double range_sigma_m);
 

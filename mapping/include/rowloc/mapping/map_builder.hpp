@@ -78,6 +78,7 @@ struct PartReport {
   bool one_sided = false;          ///< seen from one side: the hidden face from the canopy top (row_outline.hpp)
   double width_m = 0.0;            ///< median width of its outline at h_ref
   double width_spread_m = 0.0;     ///< one-sided: spread of the width over its stations (IQR / 1.349)
+  double outline_sigma_m = 0.0;    ///< the outline's estimated accuracy across it, written to the map
   int mesh_levels = 0;             ///< outlines lofted into its mesh (0: no mesh)
   std::size_t mesh_triangles = 0;
   std::optional<double> mesh_slice_max_m;  ///< its mesh cut at h_ref against its outline, largest distance

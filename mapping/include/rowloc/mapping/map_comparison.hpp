@@ -31,6 +31,8 @@ struct PartMatch {
   std::string truth_id;    ///< empty: invented
   double p95_m = 0.0;      ///< over this part's samples (built -> truth)
   double max_m = 0.0;
+  double rms_m = 0.0;          ///< over this part's samples (built -> truth)
+  double stated_sigma_m = 0.0; ///< the built part's own outline_sigma_m (its estimate of rms_m)
   Eigen::Vector2d worst_m = Eigen::Vector2d::Zero();  ///< the sample at max_m (true map's frame)
 };
 
@@ -48,6 +50,8 @@ struct MapComparison {
   double max_m = 0.0;                     ///< Hausdorff distance
   double built_to_truth_p95_m = 0.0;
   double truth_to_built_p95_m = 0.0;
+  double built_to_truth_rms_m = 0.0;      ///< RMS over the built map's samples
+  double stated_sigma_rms_m = 0.0;        ///< RMS of the built parts' outline_sigma_m over the same samples
   std::size_t samples = 0;
 };
 

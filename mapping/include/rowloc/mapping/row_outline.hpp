@@ -98,6 +98,10 @@ struct PartOutline {
   double median_width_m = 0.0;                ///< median of left + right edge over the stations
   bool one_sided = false;                     ///< traced by TraceOneSidedOutline
   double width_spread_m = 0.0;                ///< one-sided: robust spread (IQR / 1.349) of the width
+  /// Noise of the per-station edge estimates (both edges; one-sided: the face), from their second
+  /// differences (1.4826 MAD / sqrt(1.5)): roughness and sampling noise the outline cannot follow.
+  double edge_noise_m = 0.0;
+  double width_sigma_m = 0.0;                 ///< one-sided: standard deviation of the width estimate
 };
 
 /// The top's points are thinned to the first point of each square cell of this edge (map build, step 3).
