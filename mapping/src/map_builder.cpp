@@ -45,7 +45,12 @@ double SecondsSince(Clock::time_point start) {
 
 void WriteText(const std::filesystem::path& path, const std::string& text) { mapio::WriteFileAtomically(path, text); }
 
-double Round(double value, double unit) { return std::round(value / unit) * unit; }
+/// `value` to a multiple of `unit` (a power of ten below 1), divided rather than multiplied by its
+/// inverse so that JSON prints the shortest decimal (0.0042, not 0.004200000000000001).
+double Round(double value, double unit) {
+  const double per_unit = std::round(1.0 / unit);
+  return std::round(value * per_unit) / per_unit;
+}
 
 /// The canopy top's cells (SurveyProducts::top_m) in an R-tree, for the parts seen from one side.
 class TopCells {
