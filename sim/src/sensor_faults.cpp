@@ -17,6 +17,13 @@ constexpr std::size_t kMaxFaults = 1000;
 
 }  // namespace
 
+bool SensorFaults::GnssOut(double time_s) const {
+  // The first outage ending after time_s (they are sorted and apart).
+  const auto it = std::upper_bound(gnss_outages.begin(), gnss_outages.end(), time_s,
+                                   [](double t, const GnssOutageFault& o) { return t < o.end_s; });
+  return it != gnss_outages.end() && time_s >= it->start_s;
+}
+
 SensorFaults ParseSensorFaults(std::string_view json_object_text, std::string_view source_name,
                                std::string_view key_path_prefix, const std::vector<std::string>& wheel_names) {
   const std::string source(source_name);
@@ -33,6 +40,23 @@ SensorFaults ParseSensorFaults(std::string_view json_object_text, std::string_vi
           return f;
         },
         1, kMaxFaults);
+  }
+  if (reader.Has("gnss_outages")) {
+    faults.gnss_outages = reader.ObjectArray(
+        "gnss_outages",
+        [](Reader& item) {
+          GnssOutageFault f{item.NumberIn("start_s", 0.0, kMaxTimeS), item.NumberIn("end_s", 0.0, kMaxTimeS)};
+          if (!(f.end_s > f.start_s)) item.Fail(item.Key("end_s"), "must be after start_s");
+          item.RejectUnknownKeys();
+          return f;
+        },
+        1, kMaxFaults);
+    for (std::size_t i = 1; i < faults.gnss_outages.size(); ++i) {
+      if (faults.gnss_outages[i].start_s < faults.gnss_outages[i - 1].end_s) {
+        reader.Fail(reader.Key("gnss_outages"), "outage " + std::to_string(i) + " starts before outage " +
+                                                    std::to_string(i - 1) + " ends: give them in time order, apart");
+      }
+    }
   }
   if (reader.Has("imu_dead_after_s")) faults.imu_dead_after_s = reader.NumberIn("imu_dead_after_s", 0.0, kMaxTimeS);
   if (reader.Has("wheel_encoders_dead")) {

@@ -19,7 +19,7 @@ const VehicleTruth& SimulationRun::TruthAt(double time_s) {
 
 void SimulationRun::SampleGnss(double time_s) {
   const auto& off_after = scenario_.gnss->off_after_s;
-  if (off_after && time_s > *off_after) {  // the receiver is gone: no message at all
+  if ((off_after && time_s > *off_after) || scenario_.faults.GnssOut(time_s)) {  // no message at all
     gnss_fix_ = false;
     return;
   }

@@ -246,5 +246,31 @@ TEST(ScenarioTest, BadFaultsAreNamed) {
   EXPECT_THAT(ErrorOf("agrimaro-tiles", [](json& d) { d["faults"] = 3; }), HasSubstr("faults"));
 }
 
+TEST(ScenarioTest, GnssOutagesAreIntervalsInTimeOrder) {
+  SensorFaults faults = ParseSensorFaults(
+      R"({"gnss_outages": [{"start_s": 10, "end_s": 20}, {"start_s": 20, "end_s": 25.5}, {"start_s": 60, "end_s": 120}]})",
+      "f.json", "faults", {});
+  ASSERT_EQ(faults.gnss_outages.size(), 3u);
+  EXPECT_FALSE(faults.empty());
+  for (const double t : {0.0, 9.999, 25.5, 59.9, 120.0, 1e6}) EXPECT_FALSE(faults.GnssOut(t)) << t;
+  for (const double t : {10.0, 15.0, 20.0, 25.49, 60.0, 119.9}) EXPECT_TRUE(faults.GnssOut(t)) << t;
+  const auto error = [](const char* text) {
+    try {
+      ParseSensorFaults(text, "f.json", "faults", {});
+    } catch (const ScenarioError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_THAT(error(R"({"gnss_outages": [{"start_s": 10, "end_s": 10}]})"),
+              HasSubstr("faults.gnss_outages[0].end_s: must be after start_s"));
+  EXPECT_THAT(error(R"({"gnss_outages": [{"start_s": 10, "end_s": 30}, {"start_s": 20, "end_s": 40}]})"),
+              HasSubstr("outage 1 starts before outage 0 ends"));
+  EXPECT_THAT(error(R"({"gnss_outages": [{"start_s": -1, "end_s": 3}]})"), HasSubstr("faults.gnss_outages[0].start_s"));
+  EXPECT_THAT(error(R"({"gnss_outages": [{"start_s": 1}]})"), HasSubstr("faults.gnss_outages[0].end_s"));
+  EXPECT_THAT(error(R"({"gnss_outages": [{"start_s": 1, "end_s": 2, "x": 0}]})"), HasSubstr("faults.gnss_outages[0].x"));
+  EXPECT_THAT(error(R"({"gnss_outages": []})"), HasSubstr("faults.gnss_outages"));
+}
+
 }  // namespace
 }  // namespace rowloc::sim

@@ -310,5 +310,35 @@ TEST(SimulationTest, InjectedFaultsReachTheLog) {
   EXPECT_EQ(faulty->truth.str(), clean->truth.str());  // the truth is never faulted
 }
 
+TEST(SimulationTest, AGnssOutageInTheMiddleOfARunStopsTheFixesAndTheyComeBack) {
+  Scenario scenario = Shipped("agrimaro-tiles");
+  scenario.faults.gnss_outages = {{5.0, 9.0}, {12.0, 13.0}};
+  const auto run = Simulate(scenario);
+  const auto clean = Simulate(Shipped("agrimaro-tiles"));
+  std::size_t before = 0, between = 0, after = 0;
+  for (const json& gps : Lines(run->sensors.str(), "gps")) {
+    const double t = gps["t"].get<double>();
+    EXPECT_FALSE(t >= 5.0 && t < 9.0) << t;
+    EXPECT_FALSE(t >= 12.0 && t < 13.0) << t;
+    before += t < 5.0;
+    between += t >= 9.0 && t < 12.0;
+    after += t >= 13.0;
+  }
+  EXPECT_GT(before, 0u);
+  EXPECT_GT(between, 0u);
+  EXPECT_GT(after, 0u);
+  // Nothing else moved: the same drive, the same IMU messages; the truth records the outages.
+  EXPECT_EQ(Lines(run->sensors.str(), "imu"), Lines(clean->sensors.str(), "imu"));
+  const std::vector<json> truth = Lines(run->truth.str(), "truth"), clean_truth = Lines(clean->truth.str(), "truth");
+  ASSERT_EQ(truth.size(), clean_truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const double t = truth[i]["t"].get<double>();
+    EXPECT_EQ(truth[i]["x_m"], clean_truth[i]["x_m"]);
+    if ((t > 5.2 && t < 8.8) || (t > 12.2 && t < 12.8)) {
+      EXPECT_FALSE(truth[i]["gnss_available"].get<bool>()) << t;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rowloc::sim
