@@ -138,7 +138,7 @@ struct JointStatistics {
 /// update must not be applied: S not positive definite (R must be; NIS = +inf) or the NIS above the
 /// gate. Small matrices (n <= ~25, m <= 8) and a sparse H: P H^T is m column operations on
 /// contiguous columns of the column-major P, O(nnz(H) n), without Eigen's GEMM packing
-/// (docs/benchmarks.md, "Vehicle EKF").
+/// (docs/notes/2026-12-benchmarks-history.md, "Vehicle EKF (issue 4)").
 template <typename Tall, typename Square>
 bool GateJointly(const Eigen::MatrixXd& covariance, const VectorRef& innovation, const MatrixRef& jacobian,
                  const MatrixRef& noise, double gate_threshold, JointStatistics<Tall, Square>& joint,

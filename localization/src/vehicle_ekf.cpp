@@ -344,7 +344,7 @@ bool VehicleEkf::ApplyWheelAngles(const formats::WheelsMessage& wheels, ProcessR
   last_wheel_angles_ = z;
   // Until the wheel rates are known to about a tick per sample, the speeds (their wider noise)
   // carry the wheels: a precise angle linearized far from the truth can drive the filter away
-  // (docs/localization-filter.md §5.7). The angles are re-anchored so that they start from here.
+  // (docs/notes/2026-12-02-localization-filter.md §5.7). The angles are re-anchored so that they start from here.
   if (wheel_angles_anchored_) {
     const double max_sigma = config_.wheels.angle_max_prediction_sigma_rad;
     const double max_variance = max_sigma * max_sigma;

@@ -1,5 +1,5 @@
 // VehicleEkf: clock faults and sensor health (vehicle_ekf.hpp; sensor_health.hpp;
-// docs/localization-filter.md §8).
+// docs/localization-filter.md §7).
 #include "rowloc/localization/vehicle_ekf.hpp"
 
 #include <array>

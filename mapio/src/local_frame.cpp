@@ -14,7 +14,8 @@ struct LocalFrame::Impl {
 
 std::string GeodeticPositionProblem(double latitude_deg, double longitude_deg, double altitude_m) {
   // The valid case (every GNSS fix) returns before building a stream: an ostringstream costs a
-  // locale set-up, 3.5 % of the instructions of a swerve EKF cycle (docs/benchmarks.md).
+  // locale set-up, 3.5 % of the instructions of a swerve EKF cycle
+  // (docs/notes/2026-12-benchmarks-history.md, "2026-12-02 (3)").
   if (std::abs(latitude_deg) <= 90.0 && std::abs(longitude_deg) <= 180.0 && std::isfinite(altitude_m)) return {};
   std::ostringstream out;
   out.precision(17);

@@ -11,7 +11,7 @@ set(_swerve --vehicle config/vehicles/agrimaro-swerve.json)
 rowloc_script_test(seed_sweep_tiles ON
   "\\| 1 \\| - \\| [0-9.]+ \\(2\\.62-3\\.40\\) \\| [0-9.]+ wheels .*\\| [0-9]+ % \\|.*\\| 2 \\| - \\| .*over 2 seeds.*never loses its absolute fixes.*odometry whiteness: median [0-9]+ % of lags inside their band, [0-2] of 2 seeds >= 95 %"
   seed-sweep config/scenarios/agrimaro-tiles.json ${_swerve} --filter config/filters/default.json --seeds 1-2)
-# The whiteness control (docs/localization-filter.md §5.11): with an encoder whose speed error is
+# The whiteness control (docs/notes/2026-12-02-localization-filter.md §5.11): with an encoder whose speed error is
 # white and the filter file with the simulated sensors' noises, the wheel innovations pass issue 4's
 # test (>= 95 % of lags inside the band) on seed 12: 100 % (with the default file 94 %; with the
 # 1024-tick encoder and the same file 10 %).

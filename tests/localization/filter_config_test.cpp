@@ -170,7 +170,7 @@ TEST(FilterConfig, MethodFilesDifferFromTheDefaultInOneField) {
 }
 
 TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheWalksTheTorqueNoiseAndTheSlipRadius) {
-  // Angles instead of speeds, one kappa for all wheels' terrain (docs/localization-filter.md §5.4);
+  // Angles instead of speeds, one kappa for all wheels' terrain (docs/notes/2026-12-02-localization-filter.md §5.4);
   // R_w consistent there, so the slip uses it (§6); the radii drift together (§5.6).
   FilterConfig expected;
   expected.name = "wheel-angles";
@@ -187,7 +187,7 @@ TEST(FilterConfig, WheelAnglesFileDiffersInTheAngleSwitchTheWalksTheTorqueNoiseA
 
 TEST(FilterConfig, DifferentialFileDiffersInTheWheelSpeedSigma) {
   // The differential drive's encoder noise identified from its wheel NIS (scripts/tune-noise,
-  // docs/localization-filter.md §5.8): 0.1 rad/s made the NIS half its expected value.
+  // docs/notes/2026-12-02-localization-filter.md §5.8): 0.1 rad/s made the NIS half its expected value.
   FilterConfig expected;
   expected.name = "differential";
   expected.wheels.speed_sigma_radps = 0.06345;
@@ -206,7 +206,7 @@ TEST(FilterConfig, RoughCanopyFileDiffersInTheRangeSigma) {
 }
 
 TEST(FilterConfig, CanopyGnssFileDiffersInTheGnssBiasTheRadiusPriorAndTheIteratedWheels) {
-  // An SBAS receiver under canopy and wheels without torque sensors (docs/localization-filter.md
+  // An SBAS receiver under canopy and wheels without torque sensors (docs/notes/2026-12-02-localization-filter.md
   // §5.9): GNSS-bias states, radii that share the terrain's steady slip in their prior, and the
   // iterated wheel-speed update.
   FilterConfig expected;
@@ -222,7 +222,7 @@ TEST(FilterConfig, CanopyGnssFileDiffersInTheGnssBiasTheRadiusPriorAndTheIterate
 }
 
 TEST(FilterConfig, CanopyGnssFlatFileTradesTheIterationsForALowerSpeedNoiseAndAWiderRadiusPrior) {
-  // canopy-gnss.json for flat ground (docs/localization-filter.md §5.10): no iterated update (its
+  // canopy-gnss.json for flat ground (docs/notes/2026-12-02-localization-filter.md §5.10): no iterated update (its
   // pull on R_w is a counter-bias, §5.9 item 3); a lower velocity noise, which gives the speed
   // fewer false clues on the radius; a radius prior wide enough for the driven wheels' slip.
   FilterConfig expected = LoadFilterConfig(FilterFile("canopy-gnss"));
@@ -236,7 +236,7 @@ TEST(FilterConfig, CanopyGnssFlatFileTradesTheIterationsForALowerSpeedNoiseAndAW
 }
 
 TEST(FilterConfig, WhiteEncoderFileHasTheSimulatedSensorsNoises) {
-  // The whiteness control (docs/localization-filter.md §5.11): the noises of the simulated sensors
+  // The whiteness control (docs/notes/2026-12-02-localization-filter.md §5.11): the noises of the simulated sensors
   // where the default is conservative. The encoder wheel_encoder_white has no relative speed error,
   // the IMU profile's bias walk is 0.0004 m/s^2/sqrt(s), and the simulated vehicles hold their speed.
   FilterConfig expected;

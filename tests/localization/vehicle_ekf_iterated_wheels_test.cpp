@@ -1,5 +1,5 @@
 // The iterated wheel-speed update (wheels.speed_update_iterations; filter_config.hpp;
-// docs/localization-filter.md §5.9): it reaches the Gauss-Newton fixed point of the update, which
+// docs/notes/2026-12-02-localization-filter.md §5.9): it reaches the Gauss-Newton fixed point of the update, which
 // the one-step EKF update of the ratio omega = v / (R_w (1 - kappa mu)) does not, and changes the
 // track little where the linearization is good.
 #include "vehicle_ekf_test_support.hpp"

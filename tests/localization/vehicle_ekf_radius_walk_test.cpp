@@ -1,4 +1,4 @@
-// The rolling radius in pure wheel odometry (docs/localization-filter.md §5.9, item 3;
+// The rolling radius in pure wheel odometry (docs/notes/2026-12-02-localization-filter.md §5.9, item 3;
 // tools/ratio-scale-walk). Without a fix, omega = v / (R_w (1 - kappa mu)) observes the ratio of
 // v and R_w, not their common scale. The filter's speed noise is in m/s: under that model a ratio
 // steadier than the speed noise allows is evidence for a larger radius, and the exact posterior

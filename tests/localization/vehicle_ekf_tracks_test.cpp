@@ -1,4 +1,4 @@
-// VehicleEkf on a tracked vehicle in a turn (docs/localization-filter.md §5.8): the simulator's
+// VehicleEkf on a tracked vehicle in a turn (docs/notes/2026-12-02-localization-filter.md §5.8): the simulator's
 // tracked-circle-gnss-loss run (two laps of a 5 m circle, no GNSS after 40 s) replayed with the
 // turning resistance in the tracks' traction, and without it (mu_t = 0 in the vehicle file).
 #include "rowloc/formats/sensor_log_reader.hpp"

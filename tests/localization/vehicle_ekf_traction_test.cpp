@@ -1,6 +1,6 @@
 // VehicleEkf with traction states (slip_aware_odometry.torque_sigma_nm > 0): the torques are a
 // measurement of mu = T / (N r) instead of an exact input (errors in variables,
-// docs/localization-filter.md §5.5): initialisation from the last torques, the `torque` update,
+// docs/notes/2026-12-02-localization-filter.md §5.5): initialisation from the last torques, the `torque` update,
 // the re-anchoring on a torque step, and the default without them.
 #include "vehicle_ekf_test_support.hpp"
 

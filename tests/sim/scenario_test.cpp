@@ -107,7 +107,7 @@ TEST(ScenarioTest, RobustnessVariantsChangeOneThingOfTheFourSensorRun) {
   EXPECT_EQ(LoadScenario(ScenarioDir() / "vineyard-002-8us.json").vehicle.ultrasonic.size(), 8u);
 }
 
-// The whiteness controls (docs/localization-filter.md §5.11) are their base runs with the control
+// The whiteness controls (docs/notes/2026-12-02-localization-filter.md §5.11) are their base runs with the control
 // encoder: nothing else may differ, or the comparison of the wheel innovations would not isolate it.
 TEST(ScenarioTest, WhiteEncoderVariantsChangeOnlyTheEncoder) {
   for (const std::string base :

@@ -25,7 +25,7 @@
 // first. Unknown keys are refused, also in an overlay and in its bases (a typo must not fall back
 // silently to a default); errors name the file, the key path and the reason (the same strict reader
 // as the simulator's files). Every number has a physical domain [min, max] (filter_config.cpp,
-// Rules; docs/localization-filter.md §1.1): a sign check alone let a prediction step of 1e-300 s
+// Rules; docs/localization-filter.md §3): a sign check alone let a prediction step of 1e-300 s
 // hang the filter and a sigma of 1e300 overflow its covariance.
 #pragma once
 
@@ -54,7 +54,7 @@ struct ProcessNoise {
 /// Lindgren et al. 2002: rolling radius R_w and the torque/slip relation of every wheel as EKF states. The
 /// relation is held as the slip compliance kappa = N r / k_s (slip per unit traction coefficient,
 /// dimensionless; k_s Lindgren et al.'s torque/slip gradient, N r the wheel's static load times its nominal
-/// radius), not as k_s: see measurement_models.hpp and docs/localization-filter.md §5.2.
+/// radius), not as k_s: see measurement_models.hpp and docs/notes/2026-12-02-localization-filter.md §5.2.
 struct SlipAwareOdometryConfig {
   bool enabled = true;
   double rolling_radius_sigma_m = 0.01;             ///< initial sigma of R_w around the nominal radius
@@ -65,30 +65,31 @@ struct SlipAwareOdometryConfig {
   double slip_compliance_noise_per_sqrt_m = 0.003;  ///< kappa random walk per sqrt(metre rolled)
   /// Correlation rho in [0, 1) of the kappas of two wheels, in their initial covariance and in
   /// their random walk (wheels of one vehicle roll on one terrain): the difference of two wheels'
-  /// kappas has (1 - rho) times the variance of independent ones (docs/localization-filter.md §5.4).
+  /// kappas has (1 - rho) times the variance of independent ones (docs/notes/2026-12-02-localization-filter.md §5.4).
   double slip_compliance_wheel_correlation = 0.0;
   /// Correlation rho in [0, 1) of the random walks of two wheels' R_w (their initial sigmas stay
   /// independent). What changes a radius during a drive (tyre temperature and pressure, load, the
   /// terrain's sinkage) changes every wheel's alike; only the difference of two radii turns the
-  /// vehicle, and it has (1 - rho) times the walk of independent ones (docs/localization-filter.md §5.6).
+  /// vehicle, and it has (1 - rho) times the walk of independent ones
+  /// (docs/notes/2026-12-02-localization-filter.md §5.6).
   double rolling_radius_noise_wheel_correlation = 0.0;
   /// Correlation rho in [0, 1) of two wheels' R_w in their initial covariance. With independent
   /// priors the wheel speeds pin the radii's differences at once and leave their common part with
   /// sigma / sqrt(wheels): a common error of the prior (the steady slip of the terrain, which R_w
-  /// absorbs without a torque sensor) is then several sigma off (docs/localization-filter.md §5.9).
+  /// absorbs without a torque sensor) is then several sigma off (docs/notes/2026-12-02-localization-filter.md §5.9).
   double rolling_radius_prior_wheel_correlation = 0.0;
   /// Wheels messages without torques: the traction coefficient from the acceleration state
   /// (measurement_models.hpp) instead of 0.
   bool traction_from_acceleration = true;
   /// The torque sensor's noise, N m (>= 0). 0: the measured torques are taken as exact. > 0: one
   /// traction-coefficient state mu per wheel, which the torques measure (sigma T / (N r)); a torque
-  /// step beyond the gate re-anchors it (docs/localization-filter.md §5.5).
+  /// step beyond the gate re-anchors it (docs/notes/2026-12-02-localization-filter.md §5.5).
   double torque_sigma_nm = 0.0;
   /// Random walk of the traction states between torque steps, 1/sqrt(s).
   double traction_noise_per_sqrt_s = 1e-4;
   /// The SAE slip (wheel_slip_estimate.hpp) with each wheel's R_w state instead of its nominal
   /// radius. Worth it only where R_w is consistent (the traction states separate it from kappa,
-  /// docs/localization-filter.md §5.5), and above all on the smoothed stream (§6).
+  /// docs/notes/2026-12-02-localization-filter.md §5.5), and above all on the smoothed stream (§6).
   bool slip_with_rolling_radius = false;
   /// How much R_w (m) and kappa may change between two drives (tyre pressure, temperature and
   /// wear; another terrain): added in quadrature to the sigmas of a calibration carried from a
@@ -157,7 +158,7 @@ struct WheelNoise {
   /// or accelerates (WheelSpeedModel). The simulated encoders (config/sensors.json) use 0.02 s.
   double encoder_low_pass_time_constant_s = 0.0;
   /// Use the encoders' cumulative angles (wheels message `angle_rad`) instead of their speeds:
-  /// one wheel-angle state per wheel (wheel_angle_model.hpp; docs/localization-filter.md §5.4).
+  /// one wheel-angle state per wheel (wheel_angle_model.hpp; docs/notes/2026-12-02-localization-filter.md §5.4).
   /// A wheels message without angles is still used as speeds.
   bool angle_measurement = false;
   /// Per wheel, per sample: the tick angle over sqrt(12) (uniform quantization); 1024 ticks per
@@ -169,14 +170,14 @@ struct WheelNoise {
   /// rad (default: one tick at 1024 ticks per revolution). Otherwise (after initialisation, until
   /// the wheel rates are known to about a tick per sample) the message's speeds are used and the
   /// angles re-anchored: precise angles linearized far from the truth can drive the filter away
-  /// (docs/localization-filter.md §5.7).
+  /// (docs/notes/2026-12-02-localization-filter.md §5.7).
   double angle_max_prediction_sigma_rad = 6.14e-3;
   /// Gauss-Newton iterations of the wheel-speed update, 1 to 10 (1: the EKF update). Each further
   /// iteration re-linearizes at the updated state (the iterated EKF, Bell & Cathey 1993; Särkkä
   /// 2013 §5.4), whose fixed point is the mode of the update's posterior. For the ratio
   /// omega = v / (R_w (1 - kappa mu)) that mode lies towards smaller (v, R_w): the iterations pull
   /// R_w down, against the walk up that the speed's process noise causes without fixes. A
-  /// counter-bias, not a cure (docs/localization-filter.md §5.9 item 3).
+  /// counter-bias, not a cure (docs/notes/2026-12-02-localization-filter.md §5.9 item 3).
   int speed_update_iterations = 1;
 };
 

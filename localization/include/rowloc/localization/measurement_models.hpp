@@ -20,12 +20,12 @@
 //           r_i the nominal radius. Same model; the filter holds kappa instead of k_s because the
 //           modelled slip kappa mu is linear in kappa, while T / k_s is not in k_s: its derivative
 //           -T/k^2 vanishes for a stiff prior, which made R_w absorb the slip with a false
-//           confidence (docs/localization-filter.md §5.2); kappa is dimensionless, so one prior
+//           confidence (docs/notes/2026-12-02-localization-filter.md §5.2); kappa is dimensionless, so one prior
 //           fits every vehicle.
 //           A message without torques has mu_i = 0, or (traction_from_acceleration) the part the
 //           acceleration demands, mu_i = (cos(delta_i) a_x + sin(delta_i) a_y) / g: then R_i absorbs
 //           the constant rolling-resistance part and kappa_i mu_i models the slip change when the
-//           vehicle speeds up or brakes (docs/localization-filter.md §5.3); a skid steer's tracks
+//           vehicle speeds up or brakes (docs/notes/2026-12-02-localization-filter.md §5.3); a skid steer's tracks
 //           add the turning resistance's part, TurningResistanceTraction (§5.8))
 //   with an encoder low-pass filter of time constant tau, v_i is replaced by its value tau earlier,
 //   to first order v_i - tau dv_i/dt, where dv_i/dt = cos(delta_i) (ax + r vy) + sin(delta_i)
@@ -95,7 +95,7 @@ double WheelTractionScaleNm(const mapio::VehicleConfig& vehicle, std::size_t ind
 /// kTurningTractionDeadZone). The dead zone is this filter's choice, not physics: without it the
 /// yaw rate's excursions on a straight drive made tau a regressor of noise for the slip
 /// compliance, which fell from 0.6 to 0 over the cruise and mispredicted the stop
-/// (docs/localization-filter.md §5.8). 0 (and 0) for other vehicles and for a skid steer without
+/// (docs/notes/2026-12-02-localization-filter.md §5.8). 0 (and 0) for other vehicles and for a skid steer without
 /// track data; mu_t = 0 in the vehicle file turns the term off.
 inline constexpr double kTurningTractionDeadZone = 0.5;
 struct TurningTraction {
@@ -110,7 +110,7 @@ TurningTraction TurningResistanceTraction(const mapio::VehicleConfig& vehicle, s
 /// demands: the acceleration's, (cos(delta) a_x + sin(delta) a_y) / g (the wheels carry the mass
 /// equally; the rolling-resistance part is constant on one terrain and R_w absorbs it), plus for a
 /// skid steer the turning resistance's (TurningResistanceTraction; without it a tracked vehicle's
-/// speeds were gated out in every turn, docs/localization-filter.md §5.8), else 0. Throws
+/// speeds were gated out in every turn, docs/notes/2026-12-02-localization-filter.md §5.8), else 0. Throws
 /// std::invalid_argument for an index beyond the wheels or a torque count other than the wheel count.
 double WheelTractionCoefficient(const Eigen::VectorXd& x, const mapio::VehicleConfig& vehicle, const StateLayout& layout,
                                 std::size_t index, const std::optional<std::vector<double>>& torque_nm,

@@ -1,5 +1,5 @@
 // Health of each sensor of a filter run: ok, suspect or excluded, with the reason and counts
-// (docs/localization-filter.md §8). A chi-square gate rejects single outliers; it cannot tell which
+// (docs/localization-filter.md §7). A chi-square gate rejects single outliers; it cannot tell which
 // sensor is wrong when one sensor drags the state and the others are then gated against it (a dead
 // IMU reading zeros: the filter follows it and gates the GNSS fixes and the wheels). The monitor
 // looks at two kinds of evidence that do not depend on the state the faulty sensor corrupted:

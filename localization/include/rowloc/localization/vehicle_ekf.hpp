@@ -28,7 +28,7 @@
 // Clock faults: |t| > kMaxTimeS is refused; a stamp more than max_time_jump_s from the filter's time
 // is refused and counted (time_jumps_refused), unless a run of such messages shows the whole clock
 // moved (the filter then re-initialises on the new time base, with a notice). A prediction never
-// takes more than kMaxPredictionSteps steps. Sensor health (sensor_health.hpp; docs §8): a sensor
+// takes more than kMaxPredictionSteps steps. Sensor health (sensor_health.hpp; docs §7): a sensor
 // whose readings are stuck while the vehicle moves and that disagrees with the others is excluded
 // (its updates skipped, the state dropped and re-initialised without it, except for the GNSS),
 // every change reported as a notice.
@@ -259,7 +259,7 @@ class VehicleEkf {
   /// kappa mu <= max_model_slip (so that 1 - kappa mu > 0). mu: the last wheels message's torques;
   /// without torques, with before_wheel_model and traction_from_acceleration, the motion's
   /// (WheelTractionCoefficient); else none. A crossed limit is projected with the covariance
-  /// (state_bound.hpp: the correlated states move with it; docs/localization-filter.md §5.8).
+  /// (state_bound.hpp: the correlated states move with it; docs/notes/2026-12-02-localization-filter.md §5.8).
   void ProjectStates(bool before_wheel_model = false);
   /// Wheel `wheel`'s R_w within [0.5, 1.5] x nominal and kappa >= 0 (the part of ProjectStates
   /// that needs no mu; applied to smoothed states too). The layout must be slip-aware.

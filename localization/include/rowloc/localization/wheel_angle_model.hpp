@@ -1,5 +1,5 @@
 // Wheel-angle states: the encoders' cumulative angle as the wheel measurement, instead of their
-// speed (docs/localization-filter.md §5.4; FilterConfig wheels.angle_measurement).
+// speed (docs/notes/2026-12-02-localization-filter.md §5.4; FilterConfig wheels.angle_measurement).
 //
 // Why. An incremental encoder counts whole ticks of 2 pi / n rad. Its speed output,
 // (c_k - c_{k-1}) 2 pi / (n dt), carries the difference e_{k-1} - e_k of the quantization errors of

@@ -50,7 +50,7 @@ WheelEncoderConfig DefaultWheelEncoderConfig();        ///< "wheel_encoder_1024"
 /// 0.31 rad/s at 1024 ticks), no low-pass, white Gaussian speed noise of 0.1 rad/s (the default
 /// filter's wheel sigma). A control sensor: its speed error is what the filter's wheel model
 /// assumes, so the innovations' whiteness shows the filter's own model error, apart from the
-/// 1024-tick encoder's correlated quantization (docs/localization-filter.md §5.11).
+/// 1024-tick encoder's correlated quantization (docs/notes/2026-12-02-localization-filter.md §5.11).
 WheelEncoderConfig WhiteWheelEncoderConfig();
 SteeringEncoderConfig DefaultSteeringEncoderConfig();  ///< "steering_encoder_12bit"
 SensorProfiles DefaultSensorProfiles();

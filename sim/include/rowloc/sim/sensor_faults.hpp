@@ -1,6 +1,6 @@
 // Sensor faults a simulation scenario can inject (docs/simulation-scenarios.md, "faults"), so that
 // the filter's defences (consensus initialisation, sensor health, clock checks;
-// docs/localization-filter.md §2 and §8) are tested on the faults they are meant for:
+// docs/localization-filter.md §2 and §7) are tested on the faults they are meant for:
 //
 //   gnss_outliers       [{t_s, offset_m: [east, north]}]: the first fix at or after t_s is moved by
 //                       offset_m (a multipath or software fault; 111 m or 4,000 km)
