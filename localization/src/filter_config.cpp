@@ -157,7 +157,7 @@ FilterConfig ReadConfig(Reader& root) {
       if (s.Has(old)) {
         s.Fail(s.Key(old), "was replaced on 2026-12-02 by the slip compliance kappa = N r / k_s (slip_compliance_initial, "
                            "slip_compliance_sigma, max_model_slip, slip_compliance_noise_per_sqrt_m; "
-                           "docs/localization-filter.md §5.2)");
+                           "docs/localization-filter.md §1 and §3)");
       }
     }
     c.slip_aware_odometry = {s.Bool("enabled"), s.Number("rolling_radius_sigma_m"),
