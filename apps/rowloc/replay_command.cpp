@@ -18,6 +18,8 @@
 // `wheel_calibration` of that estimate stream, e.g. its --smoothed output) instead of the filter
 // file's nominal ones (VehicleEkf::SetWheelCalibrationPrior), their sigmas widened by the filter
 // file's change between drives (slip_aware_odometry.carried_*_change_sigma*).
+// Without --filter the vehicle file's recommended filter is used (filter_choice.hpp), else the
+// built-in defaults; the log line "replay ... with vehicle ... and filter ..." says which.
 // Same log, same configuration: same bytes (the filter is deterministic).
 // A message the filter rejects (non-finite, out of range, time going backwards) is logged with its
 // line number and counted, never silently dropped; an unreadable or invalid file exits with status 2.
@@ -29,6 +31,7 @@
 #include "rowloc/formats/estimate_stream_writer.hpp"
 #include "rowloc/formats/sensor_log_reader.hpp"
 #include "rowloc/formats/trajectory_streams.hpp"
+#include "rowloc/localization/filter_choice.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/localization_session.hpp"
 #include "rowloc/localization/reorder_buffer.hpp"
@@ -43,12 +46,14 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
+#include <vector>
 
 namespace rowloc::apps {
 namespace {
@@ -142,14 +147,28 @@ struct ReplayOutputs {
   std::size_t echo_lines = 0;
 };
 
+/// The files the filter was read from (the recommended one, the bases it extends) are inputs too:
+/// no output may overwrite them.
+void CheckFilterFilesAreNotOutputs(const localization::FilterChoice& filter, const ReplayOptions& o) {
+  if (filter.file.empty()) return;
+  std::vector<NamedPath> inputs;
+  for (const std::filesystem::path& file : localization::FilterConfigFiles(filter.file)) {
+    inputs.push_back({"filter file", file.string()});
+  }
+  CheckCommandFiles(inputs, {{"--output", o.output_path}, {"--echo-log", o.echo_log_path},
+                             {"--smoothed", o.smoothed_path}});
+}
+
 void RunReplay(const ReplayOptions& o) {
   // Before anything is opened: no output may name an input (or another output), or a device.
   CheckCommandFiles({{"log", o.log_path}, {"--vehicle", o.vehicle_path}, {"--filter", o.filter_path},
                      {"--map", o.map_path}, {"--calibration", o.calibration_path}},
                     {{"--output", o.output_path}, {"--echo-log", o.echo_log_path}, {"--smoothed", o.smoothed_path}});
-  const mapio::VehicleConfig vehicle = mapio::LoadVehicleConfig(o.vehicle_path);
-  const localization::FilterConfig config =
-      o.filter_path.empty() ? localization::FilterConfig{} : localization::LoadFilterConfig(o.filter_path);
+  const mapio::VehicleFile vehicle_file = mapio::LoadVehicleFile(o.vehicle_path);
+  const mapio::VehicleConfig& vehicle = vehicle_file.vehicle;
+  const localization::FilterChoice filter = localization::ChooseFilter(o.filter_path, vehicle_file, o.vehicle_path);
+  CheckFilterFilesAreNotOutputs(filter, o);
+  const localization::FilterConfig& config = filter.config;
   std::ifstream log(o.log_path, std::ios::binary);
   if (!log) throw std::runtime_error(o.log_path + ": cannot open sensor log: " + std::strerror(errno));
   formats::SensorLogReader reader(log, o.log_path);
@@ -188,7 +207,8 @@ void RunReplay(const ReplayOptions& o) {
     out.smoothed = std::make_unique<mapio::OutputFile>(o.smoothed_path);
     session.EnableSmoothing();
   }
-  spdlog::info("replay {} with vehicle {} and filter {}", o.log_path, vehicle.name, config.name);
+  spdlog::info("replay {} with vehicle {} and {}", o.log_path, vehicle.name,
+               localization::DescribeFilterChoice(filter, o.vehicle_path));
   if (reader.header().reorder_window_s > 0) {
     spdlog::info("a journal in arrival order: messages ordered within its reorder window of {} s",
                  reader.header().reorder_window_s);
@@ -256,8 +276,10 @@ void RegisterReplayCommand(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("replay", "Run the localization filter over a sensor log: estimate stream");
   cmd->add_option("log", o->log_path, "Sensor log (docs/protocol.md §1) or a service journal")->required();
   cmd->add_option("--vehicle", o->vehicle_path, "Vehicle file (config/vehicles/*.json)")->required();
-  cmd->add_option("--filter", o->filter_path, "Filter file (config/filters/*.json); default: built-in defaults "
-                                              "(= config/filters/default.json)");
+  cmd->add_option("--filter", o->filter_path,
+                  "Filter file (config/filters/*.json); default: the one the vehicle file recommends "
+                  "(recommended_filter), else the built-in defaults (= config/filters/default.json). The log "
+                  "says which filter was used");
   cmd->add_option("--map", o->map_path, "Row map (GeoJSON): use the ultrasonic echoes against its rows");
   cmd->add_option("--echo-log", o->echo_log_path,
                   "With --map: one NDJSON line per echo, the position ellipse before and after it");

@@ -8,12 +8,15 @@
 // line longer than 1 MiB is refused after its first 1 MiB + 2 bytes, logged with its line number
 // and not sent, and so is an unterminated last line; a header that cannot be read ends the command
 // (exit 2). A vehicle or filter file is read by mapio::ReadInputFile (a regular file of at most
-// 16 MiB) and may nest at most 64 levels of arrays and objects, as the service allows.
+// 16 MiB) and may nest at most 64 levels of arrays and objects, as the service allows. A filter
+// file goes inline as the complete values it loads to; without --filter a vehicle file's
+// recommended filter does (AddFilter), so that send and replay choose the same filter.
 #include "commands.hpp"
 #include "option_checks.hpp"
 
 #include "rowloc/formats/bounded_line_reader.hpp"
 #include "rowloc/formats/sensor_log_reader.hpp"
+#include "rowloc/localization/filter_choice.hpp"
 #include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/service/client.hpp"
@@ -110,6 +113,25 @@ void AddConfig(nlohmann::json& request, const std::string& value, const char* na
   request[inline_key] = std::move(config);
 }
 
+/// The filter of the session: a filter file is sent inline as its complete values (what it loads
+/// to with the files it extends, which the service could not resolve), a name is left to the
+/// server; without --filter, a vehicle file's recommended filter is sent inline (so that the
+/// session runs as `rowloc replay --vehicle FILE` does), and a vehicle name's is the server's.
+void AddFilter(nlohmann::json& request, const std::string& filter, const std::string& vehicle) {
+  std::optional<localization::FilterChoice> choice;
+  if (!filter.empty() && !NamesAFile(filter)) {
+    request["filter"] = filter;
+  } else if (!filter.empty()) {
+    choice = localization::FilterChoice{localization::LoadFilterConfig(filter), filter,
+                                        localization::FilterSource::kGiven};
+  } else if (NamesAFile(vehicle)) {
+    choice = localization::LoadRecommendedFilter(mapio::LoadVehicleFile(vehicle), vehicle);
+  }
+  if (!choice) return;
+  request["filter_config"] = nlohmann::json::parse(localization::FilterConfigJson(choice->config));
+  spdlog::info("{}, sent inline", localization::DescribeFilterChoice(*choice, vehicle));
+}
+
 /// The log's header line: the first non-empty line, refused (exit 2) as `rowloc replay` refuses it.
 std::string ReadHeaderLine(formats::BoundedLineReader& lines, const std::string& log_path) {
   std::string line;
@@ -165,7 +187,7 @@ void RunSend(const SendOptions& o) {
   }
   nlohmann::json open{{"header", header}, {"period_s", o.period_s}};
   AddConfig(open, o.vehicle, "vehicle", "vehicle_config", "vehicle file");
-  AddConfig(open, o.filter, "filter", "filter_config", "filter file");
+  AddFilter(open, o.filter, o.vehicle);
   if (!o.map.empty()) open["map"] = o.map;
   if (!o.session.empty()) open["session"] = o.session;
   // Before the session is opened: a bad output path must not leave a session open on the server.
@@ -247,7 +269,9 @@ void RegisterSendCommand(CLI::App& app) {
   cmd->add_option("--to", o->to, "The service: HOST:PORT or unix:PATH (default 127.0.0.1:7878)");
   cmd->add_option("--vehicle", o->vehicle, "Vehicle name on the server, or a vehicle file (sent inline)")->required();
   cmd->add_option("--map", o->map, "Row map name on the server");
-  cmd->add_option("--filter", o->filter, "Filter name on the server, or a filter file (sent inline)");
+  cmd->add_option("--filter", o->filter,
+                  "Filter name on the server, or a filter file (sent inline as the values it loads to); default: "
+                  "the vehicle's recommended filter (a vehicle file's sent inline, a vehicle name's chosen by the server)");
   cmd->add_option("--session", o->session, "Session name (default: the server's)");
   cmd->add_option("--rate", o->rate, "max (default), realtime, or xN: N times real time");
   cmd->add_option("--period", o->period_s, "Log time between estimate lines, s")->check(PositiveNumber());

@@ -181,8 +181,29 @@ VehicleConfig ReadConfig(Reader& root) {
   config.gnss_antenna = ReadMount(root.Object("gnss_antenna"));
   config.imu = ReadMount(root.Object("imu"));
   config.ultrasonic = root.ObjectArray("ultrasonic", ReadMount, 0, Limits::kMaxUltrasonicSensors);
-  root.RejectUnknownKeys();
   return config;
+}
+
+/// The optional "recommended_filter": a non-empty string (a path, resolved by the caller).
+std::optional<std::string> ReadRecommendedFilter(Reader& root) {
+  if (!root.Has("recommended_filter")) return std::nullopt;
+  std::string value = root.String("recommended_filter");
+  if (value.empty()) {
+    root.Fail(root.Key("recommended_filter"), "must name a filter file (a path relative to the vehicle file)");
+  }
+  return value;
+}
+
+/// The vehicle and the text of its recommended filter: every key read, unknown ones refused, the
+/// configuration checked.
+std::pair<VehicleConfig, std::optional<std::string>> ParseDocument(std::string_view json_text, const std::string& source) {
+  const json document = detail::ParseJsonText<VehicleConfigError>(json_text, source);
+  Reader root(document, source, "");
+  VehicleConfig config = ReadConfig(root);
+  std::optional<std::string> recommended = ReadRecommendedFilter(root);
+  root.RejectUnknownKeys();
+  if (const auto problem = VehicleConfigProblem(config)) throw VehicleConfigError(source + ": " + *problem);
+  return {std::move(config), std::move(recommended)};
 }
 
 }  // namespace
@@ -220,16 +241,25 @@ std::optional<std::string> VehicleConfigProblem(const VehicleConfig& config) {
 }
 
 VehicleConfig ParseVehicleConfig(std::string_view json_text, std::string_view source_name) {
-  const std::string source(source_name);
-  const json document = detail::ParseJsonText<VehicleConfigError>(json_text, source);
-  Reader root(document, source, "");
-  VehicleConfig config = ReadConfig(root);
-  if (const auto problem = VehicleConfigProblem(config)) throw VehicleConfigError(source + ": " + *problem);
-  return config;
+  return ParseDocument(json_text, std::string(source_name)).first;
 }
 
 VehicleConfig LoadVehicleConfig(const std::filesystem::path& path) {
   return ParseVehicleConfig(detail::ReadTextFile<VehicleConfigError>(path, "vehicle file"), path.string());
+}
+
+VehicleFile ParseVehicleFile(std::string_view json_text, const std::filesystem::path& path) {
+  auto [vehicle, recommended] = ParseDocument(json_text, path.string());
+  VehicleFile file{std::move(vehicle), std::nullopt};
+  if (recommended) {
+    const std::filesystem::path named(*recommended);
+    file.recommended_filter = named.is_absolute() ? named : path.parent_path() / named;
+  }
+  return file;
+}
+
+VehicleFile LoadVehicleFile(const std::filesystem::path& path) {
+  return ParseVehicleFile(detail::ReadTextFile<VehicleConfigError>(path, "vehicle file"), path);
 }
 
 // ---- shipped configurations (equal to config/vehicles/*.json; sources in docs/simulation-vehicles.md)

@@ -10,6 +10,7 @@
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/service/named_files.hpp"
+#include "rowloc/service/session_filter.hpp"
 
 #include <spdlog/spdlog.h>
 
@@ -125,7 +126,9 @@ Json ReadConfigFile(const std::filesystem::path& path, const std::string& what, 
 
 /// A vehicle or filter configuration by name or inline, as a JSON object.
 Json ConfigObject(const Json& request, const char* name_key, const char* inline_key, const std::filesystem::path& dir,
-                  ErrorCode missing, const char* what, std::size_t max_inline_bytes, std::string& name) {
+                  ErrorCode missing, const char* what, std::size_t max_inline_bytes, std::string& name,
+                  std::filesystem::path& file) {
+  file.clear();
   if (const auto it = request.find(inline_key); it != request.end() && !it->is_null()) {
     if (request.contains(name_key)) {
       Fail(ErrorCode::kInvalidField, std::string(inline_key) + ": give either " + name_key + " or " + inline_key);
@@ -141,7 +144,8 @@ Json ConfigObject(const Json& request, const char* name_key, const char* inline_
   const std::optional<std::string> given = OptionalString(request, name_key);
   if (!given) return Json(nullptr);
   name = *given;
-  return ReadConfigFile(ResolveNamedFile(dir, name, ".json", missing, what), what, name);
+  file = ResolveNamedFile(dir, name, ".json", missing, what);
+  return ReadConfigFile(file, what, name);
 }
 
 geometry::GeoOrigin OriginOf(const Json& value, const char* key) {
@@ -496,18 +500,24 @@ Dispatcher::OrderedJson Dispatcher::OpenSession(const Json& request) {
   if (!request.contains("vehicle") && !request.contains("vehicle_config")) {
     Fail(ErrorCode::kMissingField, "vehicle: missing (a vehicle name, or vehicle_config inline)");
   }
+  std::filesystem::path vehicle_file, filter_file;
   spec.vehicle_config = ConfigObject(request, "vehicle", "vehicle_config", settings_.vehicles_dir,
                                      ErrorCode::kUnknownVehicle, "vehicle", settings_.max_inline_config_bytes,
-                                     spec.vehicle);
-  spec.filter_config = ConfigObject(request, "filter", "filter_config", settings_.filters_dir,
-                                    ErrorCode::kUnknownFilter, "filter", settings_.max_inline_config_bytes,
-                                    spec.filter);
+                                     spec.vehicle, vehicle_file);
+  const Json filter = ConfigObject(request, "filter", "filter_config", settings_.filters_dir,
+                                   ErrorCode::kUnknownFilter, "filter", settings_.max_inline_config_bytes, spec.filter,
+                                   filter_file);
   mapio::VehicleConfig vehicle;
   try {
     vehicle = mapio::ParseVehicleConfig(spec.vehicle_config.dump(), "vehicle");
   } catch (const std::exception& e) {
     Fail(ErrorCode::kInvalidConfig, e.what());
   }
+  // Complete values (the file's, its bases', the defaults'), or the vehicle's recommended filter.
+  const SessionFilter session_filter =
+      ResolveSessionFilter(filter, filter_file, spec.filter, spec.vehicle_config, vehicle_file, spec.vehicle);
+  spec.filter_config = session_filter.config;
+  spec.filter = session_filter.name;
   std::shared_ptr<const geometry::RowMap> map;
   if (const std::optional<std::string> name = OptionalString(request, "map")) {
     map = LoadMap(*name);
@@ -556,6 +566,7 @@ Dispatcher::OrderedJson Dispatcher::OpenSession(const Json& request) {
                           {"vehicle", vehicle.name},
                           {"map", opened.map.empty() ? OrderedJson(nullptr) : OrderedJson(opened.map)},
                           {"filter", opened.filter.empty() ? OrderedJson(nullptr) : OrderedJson(opened.filter)},
+                          {"filter_source", std::string(localization::FilterSourceName(session_filter.source))},
                           {"wheels", opened.header.wheels},
                           {"ultrasonic", opened.header.ultrasonic},
                           {"origin", formats::ndjson::OriginJson(opened.header.origin)},

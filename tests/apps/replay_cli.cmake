@@ -138,3 +138,36 @@ rowloc_cli_test(replay_rejects_huge_sigma OFF
                 "huge-sigma.json: imu.gyro_sigma_radps must be in \\[1e-09, 100\\], got 1e\\+300"
                 replay ${_logs}/agrimaro-tiles-head.ndjson --vehicle ${_swerve}
                 --filter ${PROJECT_SOURCE_DIR}/tests/data/filters/huge-sigma.json -o ${_replay_out}/x.ndjson)
+# Issue 29: without --filter, the filter the vehicle file recommends (recommended_filter). The
+# differential recommends its own file (config/filters/differential.json): the replay says so and
+# writes the bytes of a replay with that file given; with --filter the given file wins.
+set(_diff_vehicle ${PROJECT_SOURCE_DIR}/config/vehicles/differential.json)
+rowloc_cli_test(replay_simulates_a_differential_run ON "wrote"
+                simulate ${_sim_scenarios}/slip-odometry-turns.json -o ${_sim_out}/turns --no-baselines)
+set_tests_properties(apps.replay_simulates_a_differential_run PROPERTIES FIXTURES_SETUP simulate_turns)
+rowloc_cli_test(replay_uses_the_recommended_filter ON
+                "with vehicle differential and filter differential \\([^)]*filters/differential\\.json, recommended by [^)]*vehicles/differential\\.json\\)"
+                replay ${_sim_out}/turns/sensors.ndjson --vehicle ${_diff_vehicle} -o ${_replay_out}/turns-recommended.ndjson)
+set_tests_properties(apps.replay_uses_the_recommended_filter PROPERTIES FIXTURES_REQUIRED simulate_turns
+                     FIXTURES_SETUP replay_recommended)
+rowloc_cli_reproducible_test(replay_recommended_filter_is_the_file_given
+                             ${_replay_out}/turns-given.ndjson ${_replay_out}/turns-recommended.ndjson
+                             replay ${_sim_out}/turns/sensors.ndjson --vehicle ${_diff_vehicle}
+                             --filter ${PROJECT_SOURCE_DIR}/config/filters/differential.json
+                             -o ${_replay_out}/turns-given.ndjson)
+set_tests_properties(apps.replay_recommended_filter_is_the_file_given PROPERTIES
+                     FIXTURES_REQUIRED "simulate_turns;replay_recommended")
+rowloc_cli_test(replay_given_filter_wins_over_the_recommended_one ON
+                "with vehicle differential and filter default \\([^)]*filters/default\\.json\\)"
+                replay ${_sim_out}/turns/sensors.ndjson --vehicle ${_diff_vehicle}
+                --filter ${PROJECT_SOURCE_DIR}/config/filters/default.json -o ${_replay_out}/turns-default.ndjson)
+set_tests_properties(apps.replay_given_filter_wins_over_the_recommended_one PROPERTIES FIXTURES_REQUIRED simulate_turns)
+# A recommended filter that is missing is bad input (exit 2), named with the vehicle file.
+add_test(NAME apps.replay_names_a_missing_recommended_filter
+         COMMAND ${CMAKE_COMMAND}
+                 "-DCOMMAND=$<TARGET_FILE:rowloc>;replay;${_logs}/agrimaro-tiles-head.ndjson;--vehicle;tests/data/vehicles/recommends-a-missing-filter.json;-o;${_replay_out}/x.ndjson"
+                 -DEXPECT_SUCCESS=OFF -DEXPECT_STATUS=2
+                 "-DEXPECT_STDERR=recommends-a-missing-filter\\.json: recommended_filter: tests/data/vehicles/\\.\\./filters/absent\\.json: cannot open filter file"
+                 -P ${CMAKE_CURRENT_SOURCE_DIR}/apps/run_cli.cmake
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(apps.replay_names_a_missing_recommended_filter PROPERTIES LABELS apps)

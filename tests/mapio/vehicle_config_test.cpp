@@ -7,6 +7,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <numbers>
@@ -40,9 +41,14 @@ std::string ValidJsonWith(const std::string& from, const std::string& to) {
   return text.replace(at, from.size(), to);
 }
 
-std::string ErrorOf(const std::string& text) {
+/// The error of ParseVehicleConfig (or with `as_vehicle_file`, of ParseVehicleFile) for `text`.
+std::string ErrorOf(const std::string& text, const char* as_vehicle_file = nullptr) {
   try {
-    ParseVehicleConfig(text, "test.json");
+    if (as_vehicle_file) {
+      ParseVehicleFile(text, as_vehicle_file);
+    } else {
+      ParseVehicleConfig(text, "test.json");
+    }
   } catch (const VehicleConfigError& e) {
     return e.what();
   }
@@ -306,6 +312,78 @@ TEST(VehicleConfigProblem, NamesTheField) {
   config = VineyardUgv4wsConfig();
   config.name.clear();
   EXPECT_THAT(VehicleConfigProblem(config).value_or(""), HasSubstr("name must not be empty"));
+}
+
+// ---- the recommended filter (issue 29): a path relative to the vehicle file
+
+std::string WithRecommendedFilter(const std::string& value) {
+  return ValidJsonWith(R"("name": "test-4ws",)", R"("name": "test-4ws", "recommended_filter": )" + value + ",");
+}
+
+std::string VehicleFileErrorOf(const std::string& text) { return ErrorOf(text, "config/vehicles/test.json"); }
+
+TEST(ParseVehicleFile, ResolvesTheRecommendedFilterAgainstTheVehicleFilesDirectory) {
+  const VehicleFile file = ParseVehicleFile(WithRecommendedFilter(R"("../filters/x.json")"), "config/vehicles/v.json");
+  ASSERT_TRUE(file.recommended_filter.has_value());
+  EXPECT_EQ(*file.recommended_filter, std::filesystem::path("config/vehicles/../filters/x.json"));
+  EXPECT_EQ(file.vehicle, ParseVehicleConfig(ValidJson(), "v.json"));
+  // A file in the working directory: the path as written.
+  EXPECT_EQ(ParseVehicleFile(WithRecommendedFilter(R"("x.json")"), "v.json").recommended_filter,
+            std::filesystem::path("x.json"));
+}
+
+TEST(ParseVehicleFile, KeepsAnAbsoluteRecommendedFilter) {
+  EXPECT_EQ(ParseVehicleFile(WithRecommendedFilter(R"("/etc/rowloc/filters/x.json")"), "config/vehicles/v.json")
+                .recommended_filter,
+            std::filesystem::path("/etc/rowloc/filters/x.json"));
+}
+
+TEST(ParseVehicleFile, WithoutARecommendedFilterHasNone) {
+  EXPECT_EQ(ParseVehicleFile(ValidJson(), "config/vehicles/v.json").recommended_filter, std::nullopt);
+}
+
+TEST(ParseVehicleFile, RefusesAnEmptyOrNonStringRecommendedFilterNamingTheKey) {
+  EXPECT_THAT(VehicleFileErrorOf(WithRecommendedFilter(R"("")")),
+              AllOf(HasSubstr("config/vehicles/test.json"), HasSubstr("recommended_filter"),
+                    HasSubstr("must name a filter file")));
+  for (const char* value : {"3", "null", "true", R"(["a.json"])", R"({"name": "x"})"}) {
+    EXPECT_THAT(VehicleFileErrorOf(WithRecommendedFilter(value)),
+                AllOf(HasSubstr("config/vehicles/test.json"), HasSubstr("recommended_filter"), HasSubstr("string")))
+        << value;
+  }
+}
+
+TEST(ParseVehicleFile, StillChecksTheVehicleAndRefusesUnknownKeys) {
+  EXPECT_THAT(VehicleFileErrorOf(ValidJsonWith(R"("mass_kg": 120.0)", R"("mass_kg": -1.0)")), HasSubstr("mass_kg"));
+  EXPECT_THAT(VehicleFileErrorOf(ValidJsonWith(R"("name": "test-4ws",)", R"("name": "test-4ws", "recommended": "a",)")),
+              HasSubstr("recommended"));
+}
+
+TEST(ParseVehicleConfig, AcceptsAFileWithARecommendedFilter) {
+  EXPECT_EQ(ParseVehicleConfig(WithRecommendedFilter(R"("../filters/x.json")"), "v.json"),
+            ParseVehicleConfig(ValidJson(), "v.json"));
+  EXPECT_THAT(ErrorOf(WithRecommendedFilter("7")), HasSubstr("recommended_filter"));
+}
+
+TEST(LoadVehicleFile, EveryShippedVehicleFileNamesAnExistingFilterFile) {
+  const auto dir = test::SourceDir() / "config" / "vehicles";
+  std::size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    ++files;
+    const VehicleFile file = LoadVehicleFile(entry.path());
+    ASSERT_TRUE(file.recommended_filter.has_value()) << entry.path();
+    ASSERT_TRUE(std::filesystem::is_regular_file(*file.recommended_filter)) << *file.recommended_filter;
+    EXPECT_TRUE(std::filesystem::equivalent(file.recommended_filter->parent_path(), dir.parent_path() / "filters"))
+        << entry.path() << ": its filter is not in config/filters";
+    EXPECT_EQ(file.vehicle, LoadVehicleConfig(entry.path()));
+  }
+  EXPECT_GE(files, 5u);
+  EXPECT_EQ(LoadVehicleFile(dir / "differential.json").recommended_filter->filename(), "differential.json");
+}
+
+TEST(LoadVehicleFile, MissingFileIsAnError) {
+  EXPECT_THROW(LoadVehicleFile(test::SourceDir() / "config" / "vehicles" / "no-such.json"), VehicleConfigError);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "rowloc/service/client.hpp"
 #include "test_support.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -164,10 +165,12 @@ int RunRowloc(const std::vector<std::string>& args, const fs::path& stderr_path,
 struct ServerOptions {
   fs::path journal_dir;                   ///< empty: WORKDIR/journal
   fs::path maps_dir = SourceDir() / "maps";
+  fs::path vehicles_dir = SourceDir() / "config" / "vehicles";
+  fs::path filters_dir = SourceDir() / "config" / "filters";
   std::vector<std::string> extra;         ///< more options
 };
 
-/// A `rowloc serve --port 0` process on 127.0.0.1 with the source tree's vehicles and filters.
+/// A `rowloc serve --port 0` process on 127.0.0.1, by default with the source tree's vehicles and filters.
 class Server {
  public:
   Server(const fs::path& workdir, ServerOptions options = {}) {
@@ -181,11 +184,11 @@ class Server {
                                   "--port",
                                   "0",
                                   "--vehicles",
-                                  (SourceDir() / "config" / "vehicles").string(),
+                                  options.vehicles_dir.string(),
                                   "--maps",
                                   options.maps_dir.string(),
                                   "--filters",
-                                  (SourceDir() / "config" / "filters").string(),
+                                  options.filters_dir.string(),
                                   "--journal-dir",
                                   journal_dir_.string()};
     argv.insert(argv.end(), options.extra.begin(), options.extra.end());
@@ -764,6 +767,121 @@ TEST(ClientServer, SessionKeyHelpers) {
   EXPECT_THROW(WithSessionKey("[1]", "a"), std::invalid_argument);
   EXPECT_EQ(WithoutSessionKey(R"({"type":"estimate","t":1,"session":"a-1"})", "a-1"), R"({"type":"estimate","t":1})");
   EXPECT_EQ(WithoutSessionKey(R"({"type":"estimate","session":"b"})", "a"), R"({"type":"estimate","session":"b"})");
+}
+
+// ----- the session's filter (issue 29): given > the vehicle file's recommended_filter > defaults
+
+/// DIR/vehicles and DIR/filters: copies of the shipped files, the log's vehicle recommending
+/// canopy-gnss-flat.json (which extends canopy-gnss.json) instead of default.json, and a vehicle
+/// "broken" whose recommended filter is missing.
+ServerOptions RecommendingDirectories(const fs::path& dir) {
+  ServerOptions options;
+  options.vehicles_dir = dir / "vehicles";
+  options.filters_dir = dir / "filters";
+  fs::create_directories(dir);
+  fs::copy(SourceDir() / "config" / "vehicles", options.vehicles_dir);
+  fs::copy(SourceDir() / "config" / "filters", options.filters_dir);
+  Json vehicle = Json::parse(ReadFile(options.vehicles_dir / (std::string(kVehicle) + ".json")));
+  EXPECT_EQ(vehicle.value("recommended_filter", ""), "../filters/default.json");
+  vehicle["recommended_filter"] = "../filters/canopy-gnss-flat.json";
+  std::ofstream(options.vehicles_dir / (std::string(kVehicle) + ".json")) << vehicle.dump(2);
+  vehicle["name"] = "broken";
+  vehicle["recommended_filter"] = "../filters/absent.json";
+  std::ofstream(options.vehicles_dir / "broken.json") << vehicle.dump(2);
+  return options;
+}
+
+TEST(ClientServer, TheSessionsFilterIsTheGivenOneElseTheVehiclesRecommendedOneElseTheDefaults) {
+  ScratchDir work;
+  Server server(work / "server", RecommendingDirectories(work / "config"));
+  Client client = server.Connect();
+  const auto open = [&](const std::string& session, const Json& extra) {
+    Json request = OpenParameters(session);
+    request["type"] = "open_session";
+    request.update(extra);
+    return client.Request(request);
+  };
+  // By vehicle name: the vehicle file's recommended filter.
+  Json opened = open("recommended", Json::object());
+  EXPECT_EQ(opened.value("filter_source", ""), "vehicle") << opened.dump();
+  EXPECT_EQ(opened.value("filter", ""), "canopy-gnss-flat") << opened.dump();
+  // A filter named or inline: that one.
+  opened = open("given", {{"filter", "canopy-gnss-flat"}});
+  EXPECT_EQ(opened.value("filter_source", ""), "given");
+  EXPECT_EQ(opened.value("filter", ""), "canopy-gnss-flat");
+  opened = open("default", {{"filter", "default"}});
+  EXPECT_EQ(opened.value("filter_source", ""), "given");
+  // An inline vehicle has no file to resolve a recommended filter against: the defaults.
+  Json inline_vehicle = Json::parse(ReadFile(SourceDir() / "config" / "vehicles" / (std::string(kVehicle) + ".json")));
+  Json request = OpenParameters("inline");
+  request.erase("vehicle");
+  request["type"] = "open_session";
+  request["vehicle_config"] = inline_vehicle;
+  opened = client.Request(request);
+  EXPECT_EQ(opened.value("filter_source", ""), "defaults");
+  EXPECT_TRUE(opened.at("filter").is_null()) << opened.dump();
+
+  // Each runs with its filter's values: the recommended one as the same file given, not as the defaults.
+  for (const char* session : {"recommended", "given", "default", "inline"}) Stream(client, session, 0, kLogMessages);
+  const std::string recommended = Comparable(client.GetState("recommended"));
+  EXPECT_EQ(recommended, Comparable(client.GetState("given")));
+  EXPECT_NE(recommended, Comparable(client.GetState("default")));
+  EXPECT_EQ(Comparable(client.GetState("inline")), Comparable(client.GetState("default")));
+
+  // A vehicle whose recommended filter cannot be read is refused, naming the vehicle and the key.
+  try {
+    open("broken-1", {{"vehicle", "broken"}});
+    ADD_FAILURE() << "a vehicle with a missing recommended filter opened a session";
+  } catch (const ClientError& e) {
+    EXPECT_EQ(e.code(), "invalid_config");
+    EXPECT_THAT(std::string(e.what()),
+                ::testing::AllOf(::testing::HasSubstr("vehicle 'broken'"), ::testing::HasSubstr("recommended_filter"),
+                                 ::testing::HasSubstr("absent.json: cannot open filter file")));
+  }
+  // ... unless a filter is given.
+  EXPECT_EQ(open("broken-2", {{"vehicle", "broken"}, {"filter", "default"}}).value("filter_source", ""), "given");
+  EXPECT_FALSE(client.TakeError());
+  EXPECT_GRACEFUL_STOP(server);
+}
+
+TEST(ClientServer, AResumedSessionKeepsTheFilterValuesItWasOpenedWith) {
+  constexpr std::size_t kBefore = 5000;
+  ScratchDir work;
+  ServerOptions options = RecommendingDirectories(work / "config");
+  options.journal_dir = work / "journal";
+  std::string uninterrupted;
+  {
+    Server server(work / "first", options);
+    Client client = server.Connect();
+    client.OpenSession(OpenParameters("whole"));
+    Stream(client, "whole", 0, kLogMessages);
+    uninterrupted = Comparable(client.GetState("whole"));
+    client.CloseSession("whole");
+    client.OpenSession(OpenParameters("crash"));
+    Stream(client, "crash", 0, kBefore);
+    client.GetState("crash");  // every line before it is in the journal
+    server.Kill();
+  }
+  // The journal holds every value (also those canopy-gnss-flat.json inherits from canopy-gnss.json).
+  const Json metadata = Json::parse(ReadFile(options.journal_dir / "crash.session.json"));
+  EXPECT_EQ(metadata.at("filter"), "canopy-gnss-flat");
+  const Json& filter = metadata.at("filter_config");
+  EXPECT_FALSE(filter.contains("extends")) << filter.dump();
+  EXPECT_TRUE(filter.at("gps").at("estimate_bias").get<bool>());
+  EXPECT_TRUE(filter.contains("max_time_jump_s"));
+  // The filter file changes while the server is down: the resumed session does not see it.
+  std::ofstream(options.filters_dir / "canopy-gnss-flat.json") << R"({"name": "canopy-gnss-flat"})";
+  Server server(work / "second", options);
+  EXPECT_EQ(server.listening().value("resumed_sessions", 0), 1);
+  Client client = server.Connect();
+  Stream(client, "crash", kBefore, kLogMessages);
+  EXPECT_EQ(Comparable(client.GetState("crash")), uninterrupted);
+  // A new session reads the file as it is now.
+  client.OpenSession(OpenParameters("new"));
+  Stream(client, "new", 0, kLogMessages);
+  EXPECT_NE(Comparable(client.GetState("new")), uninterrupted);
+  EXPECT_FALSE(client.TakeError());
+  EXPECT_GRACEFUL_STOP(server);
 }
 
 // `rowloc send` when things go wrong after the session is open (its CLI tests are in

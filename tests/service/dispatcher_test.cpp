@@ -101,11 +101,20 @@ TEST_F(DispatcherTest, OpenSessionRefusesBadNamesAndConfigurations) {
   EXPECT_EQ(dispatcher_->session_count(), 0u);
 }
 
+/// The differential's vehicle file into DIR/vehicles, and the filter it recommends
+/// ("../filters/differential.json") into DIR/filters.
+void CopyDifferential(const std::filesystem::path& dir) {
+  std::filesystem::copy_file(rowloc::test::SourceDir() / "config/vehicles/differential.json",
+                             dir / "vehicles/differential.json");
+  std::filesystem::copy_file(rowloc::test::SourceDir() / "config/filters/differential.json",
+                             dir / "filters/differential.json");
+}
+
 TEST_F(DispatcherTest, NamesThatAreLinksOutOfTheirDirectoryAreRefused) {
   rowloc::test::ScratchDir dir;
   std::filesystem::create_directories(dir / "vehicles");
-  std::filesystem::copy_file(rowloc::test::SourceDir() / "config/vehicles/differential.json",
-                             dir / "vehicles/differential.json");
+  std::filesystem::create_directories(dir / "filters");
+  CopyDifferential(dir.path());
   std::filesystem::create_symlink(rowloc::test::SourceDir() / "config/vehicles/tracked.json",
                                   dir / "vehicles/outside.json");
   ServiceSettings settings = SourceTreeSettings();
@@ -128,8 +137,7 @@ TEST_F(DispatcherTest, FilesOfItsDirectoriesThatCannotBeReadAreRefusedUnread) {
   // recursed once per level). Each is refused with invalid_config saying why, and the server goes on.
   rowloc::test::ScratchDir dir;
   for (const char* sub : {"vehicles", "filters", "maps"}) std::filesystem::create_directories(dir / sub);
-  std::filesystem::copy_file(rowloc::test::SourceDir() / "config/vehicles/differential.json",
-                             dir / "vehicles/differential.json");
+  CopyDifferential(dir.path());
   ASSERT_EQ(::mkfifo((dir / "vehicles/fifo.json").c_str(), 0600), 0);
   ASSERT_EQ(::mkfifo((dir / "filters/fifo.json").c_str(), 0600), 0);
   ASSERT_EQ(::mkfifo((dir / "maps/fifo.geojson").c_str(), 0600), 0);

@@ -434,6 +434,8 @@ class TestHelloAndSessions(ServiceTestCase):
         opened = self.open_main(c, "ugv1")
         self.assertEqual(opened["type"], "session_opened")
         self.assertEqual(opened["session"], "ugv1")
+        # No filter named: the one the vehicle file recommends (recommended_filter, docs/service.md §3).
+        self.assertEqual((opened["filter"], opened["filter_source"]), ("default", "vehicle"))
         listed = {x["session"]: x for x in c.list_sessions()["sessions"]}
         self.assertEqual(listed["ugv1"]["vehicle"], VEHICLE)
         self.assertEqual(listed["ugv1"]["map"], MAP)
@@ -474,6 +476,7 @@ class TestHelloAndSessions(ServiceTestCase):
                                 origin={"latitude_deg": 45.0, "longitude_deg": 7.0, "altitude_m": 200.0},
                                 session="inline.1", period_s=0.5, reorder_window_s=0.5)
         self.assertEqual(inline["session"], "inline.1")
+        self.assertEqual((inline["filter"], inline["filter_source"]), (None, "given"))
         for name in ("ugv1", auto["session"], "inline.1"):
             self.assertEqual(c.close_session(name)["session"], name)
 
@@ -955,6 +958,8 @@ class TestErrors(ServiceTestCase):
         # A vehicles directory with a link leading out of it, and one that stays inside.
         vehicles = os.path.join(self.workdir, "vehicles")
         shutil.copytree(os.path.join(SRC, "config", "vehicles"), vehicles)
+        # the filter files the vehicle files recommend ("recommended_filter": "../filters/NAME.json")
+        shutil.copytree(os.path.join(SRC, "config", "filters"), os.path.join(self.workdir, "filters"))
         outside = os.path.join(self.workdir, "outside")
         os.makedirs(outside)
         shutil.copy(os.path.join(vehicles, VEHICLE + ".json"), os.path.join(outside, "escape.json"))
@@ -1123,8 +1128,10 @@ class TestJournal(ServiceTestCase):
         # a second session with everything inline, an initial pose and its own window and period
         with open(os.path.join(SRC, "config", "vehicles", VEHICLE + ".json")) as f:
             vehicle_config = json.load(f)
-        with open(os.path.join(SRC, "config", "filters", "canopy-gnss-flat.json")) as f:
-            filter_config = json.load(f)
+        # canopy-gnss-flat.json extends canopy-gnss.json: inline goes what it loads to (as `rowloc send`)
+        filter_config = json.loads(subprocess.run(
+            [ROWLOC, "config", "show", "--filter", os.path.join(SRC, "config", "filters", "canopy-gnss-flat.json")],
+            check=True, capture_output=True, text=True).stdout)
         c.open_session(vehicle_config=vehicle_config, filter_config=filter_config, header=LOG["main"]["header"],
                        initial_pose=INITIAL_POSE, reorder_window_s=0.5, period_s=0.25, session="res2")
         stream_log(c, "res2", lines[:half // 2])

@@ -18,8 +18,13 @@
 //     "mass_kg": num, "max_steering_angle_rad": num,
 //     "wheels": [ {"name": str, "position_m": [x, y], "nominal_radius_m": num, "steerable": bool}, ... ],
 //     "tracks": null | {"contact_length_m": num, "turning_resistance_coefficient": num},
-//     "gnss_antenna": mount, "imu": mount, "ultrasonic": [mount, ...] }
+//     "gnss_antenna": mount, "imu": mount, "ultrasonic": [mount, ...],
+//     "recommended_filter": str (optional) }
 //   mount = {"name": str, "position_m": [x, y, z], "yaw_rad": num}
+// recommended_filter names the filter file (config/filters/*.json, a path relative to the vehicle
+// file) with the best known settings for the vehicle: `rowloc replay` without --filter and a
+// service session opened without a filter use it (docs/localization-filter.md §3). It is not part
+// of VehicleConfig (the vehicle's physics): LoadVehicleFile returns it, resolved.
 // The in-code configurations (AgrimaroSwerveConfig() ...) equal the shipped files (tested).
 #pragma once
 
@@ -116,6 +121,20 @@ std::optional<std::string> VehicleConfigProblem(const VehicleConfig& config);
 VehicleConfig ParseVehicleConfig(std::string_view json_text, std::string_view source_name);
 /// Reads and parses a vehicle file. Throws VehicleConfigError (including for a missing file).
 VehicleConfig LoadVehicleConfig(const std::filesystem::path& path);
+
+/// What a vehicle file holds: the vehicle, and the filter file recommended for it.
+struct VehicleFile {
+  VehicleConfig vehicle;
+  /// "recommended_filter", resolved against the vehicle file's directory (unless absolute); nullopt
+  /// when the file names none. Not opened here: its reader is the filter's (LoadFilterConfig).
+  std::optional<std::filesystem::path> recommended_filter;
+};
+
+/// Parses the text of the vehicle file at `path` (already read by the caller). Throws
+/// VehicleConfigError.
+VehicleFile ParseVehicleFile(std::string_view json_text, const std::filesystem::path& path);
+/// Reads and parses a vehicle file with its recommended filter. Throws VehicleConfigError.
+VehicleFile LoadVehicleFile(const std::filesystem::path& path);
 
 /// The shipped configurations, in code (equal to config/vehicles/<name>.json, tested).
 VehicleConfig AgrimaroSwerveConfig();    ///< "agrimaro-swerve"

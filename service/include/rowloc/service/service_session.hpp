@@ -32,7 +32,8 @@ struct SessionSpec {
   std::string vehicle;           ///< vehicle file name, or "" when inline
   nlohmann::json vehicle_config; ///< the vehicle configuration as read (object)
   std::string filter;            ///< filter file name, or "" (inline or defaults)
-  nlohmann::json filter_config;  ///< the filter configuration as read (object), or null: defaults
+  nlohmann::json filter_config;  ///< the complete filter configuration (session_filter.hpp); null in
+                                 ///< journals written before issue 29: the defaults
   std::string map;               ///< map name, or "" (no map)
   formats::LogHeader header;     ///< wheel and ranger order, origin
   double period_s = 0.1;
