@@ -72,6 +72,18 @@ void SensorHealthMonitor::ObserveAccepted(const std::string& sensor) {
   Evaluate();
 }
 
+void SensorHealthMonitor::ObserveDisagreement(const std::string& sensor, const std::optional<std::string>& why) {
+  auto it = tracks_.find(sensor);
+  if (it == tracks_.end()) {
+    if (!why) return;
+    it = tracks_.emplace(sensor, Track{}).first;
+    it->second.health.sensor = sensor;
+  }
+  if (it->second.disagreement.has_value() == why.has_value()) return;  // the state, not its numbers, matters
+  it->second.disagreement = why;
+  Evaluate();
+}
+
 bool SensorHealthMonitor::Inconsistent(const Track& track) const {
   if (track.recent_gated.size() < config_.window) return false;
   const auto gated = static_cast<double>(std::count(track.recent_gated.begin(), track.recent_gated.end(), true));
@@ -102,7 +114,7 @@ void SensorHealthMonitor::Evaluate() {
           break;
         }
       }
-    } else if (Inconsistent(t) || t.refusal) {
+    } else if (Inconsistent(t) || t.refusal || t.disagreement) {
       state = SensorHealthState::kSuspect;
     }
     if (state == t.health.state) continue;
@@ -118,6 +130,8 @@ void SensorHealthMonitor::Evaluate() {
       reason = gated_text(t);
     } else if (t.refusal) {
       reason = "message refused: " + *t.refusal;
+    } else if (t.disagreement) {
+      reason = *t.disagreement;
     }
     if (state == SensorHealthState::kExcluded) {
       ++exclusions_;

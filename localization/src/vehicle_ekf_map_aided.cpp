@@ -11,6 +11,8 @@ namespace {
 
 /// States up to which the Jacobian of an echo lives on the stack (the shipped vehicles have <= 23).
 constexpr int kStackStates = 64;
+/// Echoes between two evaluations of the map's agreement (map_agreement.hpp).
+constexpr std::size_t kAgreementEveryEchoes = 20;
 
 /// The echo's Jacobian over the whole state: m.jacobian in the pose columns, zero elsewhere.
 template <typename Matrix>
@@ -35,6 +37,11 @@ std::optional<std::size_t> VehicleEkf::UltrasonicIndex(const std::string& name, 
                                [&](const mapio::SensorMount& m) { return m.name == name; });
   if (it == vehicle_.ultrasonic.end()) return std::nullopt;
   return static_cast<std::size_t>(it - vehicle_.ultrasonic.begin());
+}
+
+void VehicleEkf::CheckMapAgreement() {
+  if (map_aided_stats_.echoes % kAgreementEveryEchoes != 0) return;
+  health_.ObserveDisagreement("map", map_agreement_.MapProblem());
 }
 
 ProcessResult VehicleEkf::Apply(const formats::UltrasonicMessage& ping) {
@@ -63,6 +70,8 @@ ProcessResult VehicleEkf::Apply(const formats::UltrasonicMessage& ping) {
                         ranging_->max_outline_sigma_m());
   const std::vector<EchoCandidate>& candidates =
       ranging_->Candidates(pose, mount, config.max_range_m, window_m, candidate_buffers_);
+  map_agreement_.ObserveEcho(!candidate_buffers_.sensor_inside_outline && !candidates.empty());
+  CheckMapAgreement();
   if (candidate_buffers_.sensor_inside_outline) {
     ++stats.inside_outline;
     trace.outcome = "inside_outline";

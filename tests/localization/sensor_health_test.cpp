@@ -97,6 +97,21 @@ TEST(SensorHealth, RefusalIsSuspectUntilTheNextAcceptedMessage) {
   EXPECT_THAT(changes, HasSubstr("gnss ok"));
 }
 
+TEST(SensorHealth, ADisagreementIsSuspectWhileItLasts) {
+  SensorHealthMonitor m;
+  m.ObserveDisagreement("map", std::nullopt);  // nothing to report: no entry
+  EXPECT_TRUE(m.Report().empty());
+  m.ObserveDisagreement("map", std::string("70 of the last 100 echoes found no row"));
+  EXPECT_EQ(Of(m, "map").state, SensorHealthState::kSuspect);
+  EXPECT_EQ(Of(m, "map").reason, "70 of the last 100 echoes found no row");
+  m.ObserveDisagreement("map", std::string("80 of the last 100 echoes found no row"));  // still suspect
+  EXPECT_EQ(m.TakeChanges().value_or(""), "sensor health: map suspect: 70 of the last 100 echoes found no row");
+  EXPECT_FALSE(m.Excluded("map"));
+  m.ObserveDisagreement("map", std::nullopt);
+  EXPECT_EQ(Of(m, "map").state, SensorHealthState::kOk);
+  EXPECT_EQ(m.TakeChanges().value_or(""), "sensor health: map ok");
+}
+
 TEST(SensorHealth, NamesAndConfigurationChecks) {
   EXPECT_EQ(SensorHealthStateName(SensorHealthState::kOk), "ok");
   EXPECT_EQ(SensorHealthStateName(SensorHealthState::kSuspect), "suspect");

@@ -16,7 +16,8 @@
 // distrust), or while its own updates are persistently inconsistent. The filter skips an excluded
 // sensor's updates and re-initialises without it (vehicle_ekf.hpp). A stuck sensor recovers (ok)
 // after stuck_messages readings that change; refusals (bad values, time jumps) are counted and make
-// the sensor suspect until its next accepted message.
+// the sensor suspect until its next accepted message. A disagreement found by another check (a ranger
+// biased against the map, a map of another field: map_agreement.hpp) makes it suspect while it lasts.
 #pragma once
 
 #include <cstddef>
@@ -65,6 +66,9 @@ class SensorHealthMonitor {
   void ObserveRefusal(const std::string& sensor, const std::string& why);
   /// A message of `sensor` accepted (clears a refusal's suspicion).
   void ObserveAccepted(const std::string& sensor);
+  /// A check outside the monitor (the map agreement, map_agreement.hpp) finds `sensor` (a ranger,
+  /// or "map") disagreeing, why; nullopt: it agrees again. Suspect while it disagrees.
+  void ObserveDisagreement(const std::string& sensor, const std::optional<std::string>& why);
 
   bool Excluded(const std::string& sensor) const;
   /// Every sensor seen, by name.
@@ -84,6 +88,7 @@ class SensorHealthMonitor {
     std::size_t changing = 0;            ///< changing readings since it became stuck
     bool stuck = false;
     std::optional<std::string> refusal;  ///< the last message was refused: why
+    std::optional<std::string> disagreement;  ///< ObserveDisagreement: why
   };
   bool Inconsistent(const Track& track) const;
   void Evaluate();

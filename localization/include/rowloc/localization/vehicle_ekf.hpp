@@ -43,6 +43,7 @@
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/measurement_models.hpp"
+#include "rowloc/localization/map_agreement.hpp"
 #include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
@@ -239,6 +240,8 @@ class VehicleEkf {
   /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it; `hint`
   /// (the message's index in the log header, usually the vehicle's order) is tried first.
   std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
+  /// Every kAgreementEveryEchoes echoes: the map agreement's finding into the sensor health ("map").
+  void CheckMapAgreement();
   std::optional<std::string> TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   /// A fix waiting for the initialisation, with the distance the wheels rolled until it.
   struct PendingFix {
@@ -322,6 +325,7 @@ class VehicleEkf {
   std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
   double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
   MapAidedStats map_aided_stats_;
+  MapAgreementMonitor map_agreement_;  ///< does the map agree with the echoes? Reported as the health of "map"
   std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
   std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
