@@ -30,34 +30,9 @@ std::string ChainText(const std::vector<ConfigLayer>& chain, const std::filesyst
   return text + next.string();
 }
 
-/// True when arrays and objects nest deeper than `limit` in `text` (brackets in strings do not
-/// count). Exact for valid JSON; invalid JSON is the parser's to refuse.
-bool NestedDeeperThan(std::string_view text, std::size_t limit) {
-  std::size_t depth = 0;
-  bool in_string = false, escaped = false;
-  for (const char c : text) {
-    if (in_string) {
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > limit) return true;
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
-    }
-  }
-  return false;
-}
-
 /// The document of `text`, which must be an object; its "extends" (if any) is removed and returned.
 json ParseLayer(std::string_view text, const std::string& source, std::string& extends) {
-  if (NestedDeeperThan(text, kMaxConfigNestingDepth)) {
+  if (JsonNestedDeeperThan(text, kMaxConfigNestingDepth)) {
     throw ConfigOverlayError(source + ": arrays and objects nested deeper than " +
                              std::to_string(kMaxConfigNestingDepth) + " levels");
   }
@@ -152,6 +127,29 @@ ConfigLayer ParseStandaloneLayer(std::string_view text, const std::string& sourc
 json MergeLayers(json start, const std::vector<ConfigLayer>& layers) {
   for (const ConfigLayer& layer : layers) MergeOverlay(start, layer.document);
   return start;
+}
+
+bool JsonNestedDeeperThan(std::string_view text, std::size_t limit) {
+  std::size_t depth = 0;
+  bool in_string = false, escaped = false;
+  for (const char c : text) {
+    if (in_string) {
+      if (escaped) {
+        escaped = false;
+      } else if (c == '\\') {
+        escaped = true;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > limit) return true;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return false;
 }
 
 }  // namespace rowloc::mapio

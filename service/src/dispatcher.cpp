@@ -7,6 +7,7 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/local_frame.hpp"
+#include "rowloc/mapio/config_overlay.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 #include "rowloc/service/named_files.hpp"
@@ -43,31 +44,6 @@ bool IsSensorType(std::string_view type) {
 }
 
 [[noreturn]] void Fail(ErrorCode code, const std::string& message) { throw ServiceError(code, message); }
-
-/// True when arrays and objects nest deeper than `limit` in `line` (brackets inside strings do not
-/// count). Exact for valid JSON; a malformed line may be refused by this instead of by the parser.
-bool NestedDeeperThan(std::string_view line, std::size_t limit) {
-  std::size_t depth = 0;
-  bool in_string = false, escaped = false;
-  for (const char c : line) {
-    if (in_string) {
-      if (escaped) {
-        escaped = false;
-      } else if (c == '\\') {
-        escaped = true;
-      } else if (c == '"') {
-        in_string = false;
-      }
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > limit) return true;
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
-    }
-  }
-  return false;
-}
 
 /// The value of a required key of the request.
 const Json& Required(const Json& request, const char* key) {
@@ -115,7 +91,7 @@ Json ReadConfigFile(const std::filesystem::path& path, const std::string& what, 
   } catch (const mapio::InputFileError& e) {
     Fail(ErrorCode::kInvalidConfig, quoted + " (" + path.filename().string() + "): " + e.reason());
   }
-  if (NestedDeeperThan(text, kMaxNestingDepth)) {
+  if (mapio::JsonNestedDeeperThan(text, kMaxNestingDepth)) {
     Fail(ErrorCode::kInvalidConfig, quoted + ": arrays and objects nested deeper than " +
                                         std::to_string(kMaxNestingDepth) + " levels");
   }
@@ -300,7 +276,7 @@ void Dispatcher::HandleLine(ClientContext& client, std::string_view line, std::s
   ++stats_.lines;
   Json id = nullptr;
   try {
-    if (NestedDeeperThan(line, kMaxNestingDepth)) {
+    if (mapio::JsonNestedDeeperThan(line, kMaxNestingDepth)) {
       Fail(ErrorCode::kLimitExceeded, "arrays and objects nested deeper than " + std::to_string(kMaxNestingDepth) +
                                           " levels");
     }
@@ -701,7 +677,7 @@ std::size_t Dispatcher::ResumeJournals(std::vector<std::string>& problems) {
     try {
       const std::string metadata = mapio::ReadInputFile(SessionJournal::MetadataPath(settings_.journal_dir, name),
                                                         kMaxSessionMetadataBytes, "session metadata");
-      if (NestedDeeperThan(metadata, kMaxNestingDepth)) {
+      if (mapio::JsonNestedDeeperThan(metadata, kMaxNestingDepth)) {
         throw std::runtime_error("session metadata nested deeper than " + std::to_string(kMaxNestingDepth) + " levels");
       }
       const Json j = Json::parse(metadata, nullptr, false);

@@ -164,5 +164,16 @@ TEST(ParseStandaloneLayer, RefusesExtends) {
   EXPECT_THAT(ErrorOf([] { ParseStandaloneLayer("3", "x"); }), HasSubstr("x: <root>: must be an object"));
 }
 
+
+TEST(JsonNesting, CountsArraysAndObjectsButNotBracketsInStrings) {
+  EXPECT_FALSE(JsonNestedDeeperThan(R"({"a": [1, {"b": 2}]})", 3));
+  EXPECT_TRUE(JsonNestedDeeperThan(R"({"a": [1, {"b": 2}]})", 2));
+  EXPECT_FALSE(JsonNestedDeeperThan(R"({"a": "[[[[{{{{", "b": "\"[["})", 1));
+  EXPECT_FALSE(JsonNestedDeeperThan("", 0));
+  EXPECT_TRUE(JsonNestedDeeperThan(std::string(65, '[') + std::string(65, ']'), kMaxConfigNestingDepth));
+  EXPECT_FALSE(JsonNestedDeeperThan(std::string(64, '[') + std::string(64, ']'), kMaxConfigNestingDepth));
+  EXPECT_FALSE(JsonNestedDeeperThan("]]]}[", 1));  // unbalanced closers do not go below zero
+}
+
 }  // namespace
 }  // namespace rowloc::mapio

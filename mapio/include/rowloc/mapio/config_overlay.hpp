@@ -40,6 +40,11 @@ inline constexpr std::size_t kMaxExtendsDepth = 16;
 /// copying a value recurses once per level.
 inline constexpr std::size_t kMaxConfigNestingDepth = 64;
 
+/// True when arrays and objects nest deeper than `limit` in the JSON `text` (brackets inside
+/// strings do not count), found without parsing: a parser's recursion is bounded before it starts.
+/// Exact for valid JSON; malformed text may be refused by this instead of by the parser.
+bool JsonNestedDeeperThan(std::string_view text, std::size_t limit);
+
 /// Merges `overlay` onto `base` by the rule above. Both are usually objects; a non-object overlay
 /// replaces the base.
 void MergeOverlay(nlohmann::json& base, const nlohmann::json& overlay);
