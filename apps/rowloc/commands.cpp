@@ -65,6 +65,7 @@ void RegisterCommands(CLI::App& app) {
   RegisterServeCommand(app);
   RegisterSendCommand(app);
   RegisterConfigCommand(app);
+  RegisterCalibrateCommand(app);
 }
 
 }  // namespace rowloc::apps

@@ -47,5 +47,6 @@ void RegisterReplayCommand(CLI::App& app);     // replay_command.cpp
 void RegisterServeCommand(CLI::App& app);      // serve_command.cpp
 void RegisterSendCommand(CLI::App& app);       // send_command.cpp
 void RegisterConfigCommand(CLI::App& app);     // config_command.cpp
+void RegisterCalibrateCommand(CLI::App& app);  // calibrate_command.cpp
 
 }  // namespace rowloc::apps

@@ -1,0 +1,304 @@
+// Ranger mount calibration (issue 28): a simulated drive along one lane of the Donati 2021
+// vineyard, replayed with a vehicle file whose ranger mounts are off; the calibration must find the
+// offsets, leave the right mounts alone, refuse a map of another field, and say why on bad input.
+#include "rowloc/calibration/drive_record.hpp"
+#include "rowloc/calibration/ranger_calibration.hpp"
+#include "rowloc/localization/map_aided_ranging.hpp"
+#include "rowloc/sim/row_world.hpp"
+#include "rowloc/sim/scenario.hpp"
+#include "rowloc/sim/simulation.hpp"
+#include "test_support.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace rowloc::calibration {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct Drive {
+  sim::Scenario scenario;
+  geometry::RowMap map;
+  std::string sensors;  ///< the sensor log
+};
+
+/// vineyard-002-4us cut to its first lane (about 130 s): the simulation's mounts are the vehicle file's.
+const Drive& OneLaneDrive() {
+  static const Drive drive = [] {
+    const auto path = test::SourceDir() / "config/scenarios/vineyard-002-4us.json";
+    std::ifstream in(path);
+    nlohmann::json document = nlohmann::json::parse(in);
+    document["route"]["lane_count"] = 1;
+    Drive d{sim::ParseScenario(document.dump(), "one-lane", path.parent_path()), {}, {}};
+    const sim::RowWorld world(*d.scenario.world);
+    d.map = world.TrueRowMap(d.scenario.row_map_height_m, world.StepForTolerance(1e-3));
+    std::stringstream sensors, truth;
+    sim::RunSimulation(d.scenario, {&sensors, &truth, nullptr, nullptr});
+    d.sensors = sensors.str();
+    return d;
+  }();
+  return drive;
+}
+
+/// The vehicle file as a user with a mis-measured ranger would write it: `name` moved by (dx, dy).
+mapio::VehicleConfig WithMountMoved(mapio::VehicleConfig vehicle, const std::string& name, double dx_m, double dy_m) {
+  for (mapio::SensorMount& m : vehicle.ultrasonic) {
+    if (m.name == name) m.position_m += Eigen::Vector3d(dx_m, dy_m, 0.0);
+  }
+  return vehicle;
+}
+
+DriveRecord Record(const std::string& sensors, const mapio::VehicleConfig& vehicle, double knot_interval_s = 0.2) {
+  std::istringstream log(sensors);
+  return ReadDriveRecord(log, "drive", vehicle, localization::FilterConfig{}, knot_interval_s);
+}
+
+RangerCalibration Calibrate(const mapio::VehicleConfig& vehicle, const RangerCalibrationConfig& config = {}) {
+  const Drive& drive = OneLaneDrive();
+  return CalibrateRangers(Record(drive.sensors, vehicle), drive.map, vehicle, localization::FilterConfig{}, config);
+}
+
+const RangerEstimate& Ranger(const RangerCalibration& c, const std::string& name) {
+  for (const RangerEstimate& r : c.rangers) {
+    if (r.name == name) return r;
+  }
+  throw std::out_of_range(name);
+}
+
+TEST(RangerCalibration, FindsA5cmMountErrorWithin5mmAndLeavesTheOtherMounts) {
+  const mapio::VehicleConfig truth = OneLaneDrive().scenario.vehicle;
+  // Configured 5 cm further out than it is: the sensor is 5 cm back along its (+y) beam.
+  const RangerCalibration c = Calibrate(WithMountMoved(truth, "us_front_left", 0.0, 0.05));
+  ASSERT_EQ(c.rangers.size(), 4u);
+  for (const RangerEstimate& r : c.rangers) {
+    SCOPED_TRACE(r.name);
+    EXPECT_TRUE(r.calibrated);
+    EXPECT_GT(r.echoes_used, 500u);
+    const double expected = r.name == "us_front_left" ? -0.05 : 0.0;
+    EXPECT_NEAR(r.along_beam_m, expected, 0.005);
+    EXPECT_EQ(r.across_beam_m, 0.0);  // not estimated by default
+    EXPECT_GT(r.along_beam_sigma_m, 0.0);
+    EXPECT_LT(r.along_beam_sigma_m, 0.005);
+    EXPECT_LT(r.rms_after_m, 0.006);  // 3 mm echo noise: the residuals are white once calibrated
+  }
+  EXPECT_GT(Ranger(c, "us_front_left").rms_before_m, 0.03);
+  // The estimated mount is the simulation's.
+  EXPECT_NEAR(Ranger(c, "us_front_left").lever_arm_m.y(), 0.5, 0.005);
+  // One ranger off by -5 cm is a mean of -12.5 mm over four.
+  EXPECT_NEAR(c.common_along_beam_m, -0.0125, 0.003);
+  EXPECT_GT(c.echoes_used, 3500u);
+  EXPECT_LT(c.echoes_unassociated, c.echoes_used / 20);
+}
+
+TEST(RangerCalibration, RightMountsStayWithin3mm) {
+  const RangerCalibration c = Calibrate(OneLaneDrive().scenario.vehicle);
+  for (const RangerEstimate& r : c.rangers) {
+    SCOPED_TRACE(r.name);
+    EXPECT_NEAR(r.along_beam_m, 0.0, 0.003);
+  }
+  EXPECT_NEAR(c.common_along_beam_m, 0.0, 0.002);
+  // The reference (GNSS, IMU, odometry without the rangers) was centimetres off; the echoes correct it.
+  EXPECT_GT(c.position_correction_rms_m, 0.005);
+}
+
+TEST(RangerCalibration, FindsAnInwardErrorOnTheRightSide) {
+  // us_rear_right (beam -y) configured at y = -0.45: 5 cm inward; its sensor is 5 cm further along the beam.
+  const RangerCalibration c = Calibrate(WithMountMoved(OneLaneDrive().scenario.vehicle, "us_rear_right", 0.0, 0.05));
+  EXPECT_NEAR(Ranger(c, "us_rear_right").along_beam_m, 0.05, 0.005);
+  EXPECT_NEAR(Ranger(c, "us_rear_right").lever_arm_m.y(), -0.5, 0.005);
+  EXPECT_NEAR(Ranger(c, "us_front_left").along_beam_m, 0.0, 0.005);
+}
+
+TEST(RangerCalibration, AcrossTheBeamOnRequestWithItsUncertainty) {
+  RangerCalibrationConfig config;
+  config.estimate_across_beam = true;
+  const RangerCalibration c = Calibrate(OneLaneDrive().scenario.vehicle, config);
+  for (const RangerEstimate& r : c.rangers) {
+    SCOPED_TRACE(r.name);
+    EXPECT_NEAR(r.along_beam_m, 0.0, 0.003);
+    // Along the rows only row ends inform: weakly observable, but bounded and with a sigma.
+    EXPECT_NEAR(r.across_beam_m, 0.0, 0.02);
+    EXPECT_GT(r.across_beam_sigma_m, 0.0);
+    EXPECT_TRUE(std::isfinite(r.across_beam_sigma_m));
+  }
+}
+
+TEST(RangerCalibration, RefusesTheMapOfAnotherField) {
+  sim::Scenario curved = sim::LoadScenario(test::SourceDir() / "config/scenarios/vineyard-curved-4us.json");
+  const sim::RowWorld world(*curved.world);
+  const geometry::RowMap other = world.TrueRowMap(1.0, world.StepForTolerance(1e-3));
+  const Drive& drive = OneLaneDrive();
+  const mapio::VehicleConfig& vehicle = drive.scenario.vehicle;
+  try {
+    (void)CalibrateRangers(Record(drive.sensors, vehicle), other, vehicle, localization::FilterConfig{});
+    FAIL() << "a map of another field was accepted";
+  } catch (const RangerCalibrationError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("not of this field"));
+  }
+}
+
+TEST(RangerCalibration, AppliesOnlyCalibratedMountsAndKeepsHeightAndYaw) {
+  const mapio::VehicleConfig vehicle = OneLaneDrive().scenario.vehicle;
+  RangerCalibration c;
+  RangerEstimate moved;
+  moved.name = "us_front_left";
+  moved.calibrated = true;
+  moved.lever_arm_m = {0.7, 0.45};
+  RangerEstimate kept = moved;
+  kept.name = "us_rear_left";
+  kept.calibrated = false;
+  c.rangers = {moved, kept};
+  const mapio::VehicleConfig out = ApplyRangerCalibration(vehicle, c);
+  EXPECT_EQ(out.ultrasonic[0].position_m, Eigen::Vector3d(0.7, 0.45, vehicle.ultrasonic[0].position_m.z()));
+  EXPECT_EQ(out.ultrasonic[0].yaw_rad, vehicle.ultrasonic[0].yaw_rad);
+  EXPECT_EQ(out.ultrasonic[1], vehicle.ultrasonic[1]);
+}
+
+/// Two straight closed rows along x (canopies 0.4 m wide at y = 0 and 2.5 m, 50 m long): the
+/// range model of the map-aided update is exact on them (no smoothing of a curved outline).
+geometry::RowMap StraightRows() {
+  geometry::RowMap map;
+  map.origin = {45.0, 7.0, 200.0};
+  for (const double y : {0.0, 2.5}) {
+    geometry::Row row;
+    row.id = "row-" + std::to_string(map.rows.size() + 1);
+    row.closed = true;
+    row.points_m = {{0.0, y - 0.2}, {50.0, y - 0.2}, {50.0, y + 0.2}, {0.0, y + 0.2}};
+    map.rows.push_back(row);
+  }
+  return map;
+}
+
+TEST(RangerCalibration, MountJacobianMatchesCentralDifferencesOfTheRangeModel) {
+  const geometry::RowMap map = StraightRows();
+  const localization::RowMapRanging ranging(map, map.origin, 2.0);
+  const double h = 1e-6;
+  // Inside the lane, straight and turned: perpendicular (|phi| below the cone's half aperture) and
+  // cone-edge geometries (0.3 rad), for each of the four mounts, along and across each beam.
+  for (const double phi : {0.0, 0.05, 0.3, -0.3}) {
+    const Eigen::Vector3d pose(20.0, 1.25, phi);
+    for (const mapio::SensorMount& m : OneLaneDrive().scenario.vehicle.ultrasonic) {
+      SCOPED_TRACE(m.name + " phi " + std::to_string(phi));
+      const localization::RangeSensorMount mount{m.position_m.head<2>(), m.yaw_rad, 0.1309};
+      const auto range = [&](const Eigen::Vector2d& lever_arm) {
+        auto moved = mount;
+        moved.lever_arm_m = lever_arm;
+        const auto candidates = ranging.Candidates(pose, moved, 4.0, 0.01);
+        EXPECT_FALSE(candidates.empty());
+        return candidates.empty() ? std::nan("") : candidates.front().predicted_range_m;
+      };
+      const auto at = ranging.Candidates(pose, mount, 4.0, 0.01);
+      ASSERT_FALSE(at.empty());
+      const Eigen::RowVector2d jacobian = MountRangeJacobian(at.front().jacobian, phi, m.yaw_rad);
+      const Eigen::Vector2d beam(std::cos(m.yaw_rad), std::sin(m.yaw_rad));
+      const Eigen::Vector2d across(-beam.y(), beam.x());
+      for (int k = 0; k < 2; ++k) {
+        const Eigen::Vector2d step = h * (k == 0 ? beam : across);
+        const double numeric = (range(mount.lever_arm_m + step) - range(mount.lever_arm_m - step)) / (2.0 * h);
+        EXPECT_NEAR(jacobian[k], numeric, 1e-6);
+      }
+      // The normal inside the cone: the echo comes back along the normal, so a step along the beam
+      // shortens the range by cos(angle between beam and normal) = cos(phi) here.
+      if (std::abs(phi) < 0.1) {
+        EXPECT_NEAR(jacobian[0], -std::cos(phi), 1e-9);
+      }
+    }
+  }
+}
+
+TEST(DriveRecord, HoldsEveryEchoAndASmoothedReference) {
+  const Drive& drive = OneLaneDrive();
+  const DriveRecord record = Record(drive.sensors, drive.scenario.vehicle);
+  std::size_t echoes = 0, silent = 0;
+  std::istringstream lines(drive.sensors);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("\"type\":\"ultrasonic\"") == std::string::npos) continue;
+    (line.find("\"range_m\":null") == std::string::npos ? echoes : silent) += 1;
+  }
+  EXPECT_EQ(record.echoes.size(), echoes);
+  EXPECT_EQ(record.pings_without_echo, silent);
+  EXPECT_EQ(record.refused_messages, 0u);
+  ASSERT_GT(record.knots.size(), 400u);
+  for (std::size_t k = 1; k < record.knots.size(); ++k) {
+    EXPECT_GE(record.knots[k].time_s - record.knots[k - 1].time_s, 0.2 - 1e-9);
+  }
+  for (std::size_t j = 1; j < record.echoes.size(); ++j) EXPECT_GE(record.echoes[j].time_s, record.echoes[j - 1].time_s);
+}
+
+TEST(DriveRecord, RefusesWhatCannotBeCalibratedWithAReason) {
+  const Drive& drive = OneLaneDrive();
+  const mapio::VehicleConfig& vehicle = drive.scenario.vehicle;
+  const auto message = [&](const std::string& sensors, const mapio::VehicleConfig& v, double knot_s = 0.2) {
+    try {
+      (void)Record(sensors, v, knot_s);
+    } catch (const DriveRecordError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_THAT(message(drive.sensors, mapio::AgrimaroSwerveConfig()), HasSubstr("no ultrasonic sensor"));
+  EXPECT_THAT(message(drive.sensors, vehicle, 0.0), HasSubstr("knot_interval_s"));
+  EXPECT_THAT(message(drive.sensors, vehicle, std::nan("")), HasSubstr("knot_interval_s"));
+  mapio::VehicleConfig renamed = vehicle;
+  renamed.ultrasonic[2].name = "us_somewhere_else";
+  EXPECT_THAT(message(drive.sensors, renamed), HasSubstr("'us_front_right' is not in the vehicle file"));
+  // The first 2000 lines: about 5 s, before the GNSS baseline initialises the filter.
+  std::istringstream all(drive.sensors);
+  std::string head, without_echoes, line;
+  for (int i = 0; i < 2000 && std::getline(all, line); ++i) head += line + "\n";
+  EXPECT_THAT(message(head, vehicle), HasSubstr("never initialised"));
+  std::istringstream again(drive.sensors);
+  while (std::getline(again, line)) {
+    if (line.find("\"type\":\"ultrasonic\"") == std::string::npos) without_echoes += line + "\n";
+  }
+  EXPECT_THAT(message(without_echoes, vehicle), HasSubstr("no ultrasonic echo"));
+}
+
+TEST(DriveRecord, AMalformedLineIsCountedAndTheRestUsed) {
+  const Drive& drive = OneLaneDrive();
+  std::string sensors = drive.sensors;
+  const std::size_t second_line = sensors.find('\n') + 1;
+  sensors.insert(second_line, "{\"type\":\"gps\",\"t\":\"soon\"}\n");
+  const DriveRecord record = Record(sensors, drive.scenario.vehicle);
+  EXPECT_EQ(record.refused_messages, 1u);
+  EXPECT_EQ(record.echoes.size(), Record(drive.sensors, drive.scenario.vehicle).echoes.size());
+}
+
+TEST(RangerCalibrationConfig, OverlayOnTheDefaultsWithClearErrors) {
+  const RangerCalibrationConfig defaults;
+  const RangerCalibrationConfig c =
+      ParseRangerCalibrationConfig(R"({"range_sigma_m": 0.01, "estimate_across_beam": true})", "cal.json");
+  EXPECT_EQ(c.range_sigma_m, 0.01);
+  EXPECT_TRUE(c.estimate_across_beam);
+  EXPECT_EQ(c.knot_interval_s, defaults.knot_interval_s);
+  const auto error = [](const std::string& text) {
+    try {
+      (void)ParseRangerCalibrationConfig(text, "cal.json");
+    } catch (const RangerCalibrationError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_THAT(error(R"({"range_sigma": 0.01})"), HasSubstr("cal.json: range_sigma: unknown key (known: knot_interval_s"));
+  EXPECT_THAT(error(R"({"range_sigma_m": "small"})"), HasSubstr("range_sigma_m: a number is expected"));
+  EXPECT_THAT(error(R"({"range_sigma_m": -1})"), HasSubstr("range_sigma_m must be positive"));
+  EXPECT_THAT(error(R"({"outer_iterations": 0})"), HasSubstr("outer_iterations must be from 1"));
+  EXPECT_THAT(error(R"({"outer_iterations": 1.5})"), HasSubstr("an integer is expected"));
+  EXPECT_THAT(error(R"({"min_echoes_per_ranger": -3})"), HasSubstr("non-negative integer"));
+  EXPECT_THAT(error(R"({"refined_gate_m": 0.5})"), HasSubstr("refined_gate_m must not exceed"));
+  EXPECT_THAT(error(R"({"estimate_across_beam": 1})"), HasSubstr("true or false"));
+  EXPECT_THAT(error(R"({"min_associated_fraction": 2})"), HasSubstr("from 0 to 1"));
+  EXPECT_THAT(error("[1, 2]"), HasSubstr("a JSON object is expected"));
+  EXPECT_THAT(error("{"), HasSubstr("cal.json: not JSON"));
+  EXPECT_THROW(CalibrateRangers({}, {}, OneLaneDrive().scenario.vehicle, {}, RangerCalibrationConfig{.knot_interval_s = 0}),
+               RangerCalibrationError);
+}
+
+}  // namespace
+}  // namespace rowloc::calibration
