@@ -1,7 +1,7 @@
 // `rowloc calibrate LOG --vehicle V --map MAP -o REPORT [--filter F] [--config C] [--write-vehicle OUT]`:
 // estimates where each ultrasonic ranger sits on the vehicle from a recorded drive along rows of a
-// known map (rowloc/calibration/ranger_calibration.hpp: one Ceres least-squares problem over every
-// echo; the reference trajectory is the filter without the rangers, smoothed).
+// known map (rowloc/calibration/ranger_calibration.hpp; localization/ranger_mount_fit.hpp states the
+// least-squares problem; the reference trajectory is the filter without the rangers, smoothed).
 // The report (JSON) gives per ranger the configured and estimated lever arm, the correction along
 // and across its beam with 1-sigma, the echoes used and the residual RMS before and after; the
 // console prints the same as a table. --write-vehicle writes the vehicle file with the calibrated
@@ -48,9 +48,9 @@ std::string ReadText(const std::string& path) {
 
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-nlohmann::ordered_json ReportJson(const calibration::RangerCalibration& c, const CalibrateOptions& o) {
+nlohmann::ordered_json ReportJson(const calibration::RangerMountFit& c, const CalibrateOptions& o) {
   nlohmann::ordered_json rangers = nlohmann::ordered_json::array();
-  for (const calibration::RangerEstimate& r : c.rangers) {
+  for (const calibration::RangerMountEstimate& r : c.rangers) {
     rangers.push_back({{"name", r.name},
                        {"calibrated", r.calibrated},
                        {"configured_position_m", {r.configured_lever_arm_m.x(), r.configured_lever_arm_m.y()}},
@@ -79,10 +79,10 @@ nlohmann::ordered_json ReportJson(const calibration::RangerCalibration& c, const
           {"solver", c.solver_report}};
 }
 
-void LogTable(const calibration::RangerCalibration& c) {
+void LogTable(const calibration::RangerMountFit& c) {
   spdlog::info("{:<20} {:>9} {:>14} {:>14} {:>12} {:>10} {:>10}", "ranger", "used", "along beam mm",
                "across beam mm", "sigma mm", "rms before", "rms after");
-  for (const calibration::RangerEstimate& r : c.rangers) {
+  for (const calibration::RangerMountEstimate& r : c.rangers) {
     spdlog::info("{:<20} {:>9} {:>14.1f} {:>14.1f} {:>5.1f} / {:<5.1f} {:>8.1f}mm {:>8.1f}mm{}", r.name, r.echoes_used,
                  1e3 * r.along_beam_m, 1e3 * r.across_beam_m, 1e3 * r.along_beam_sigma_m, 1e3 * r.across_beam_sigma_m,
                  1e3 * r.rms_before_m, 1e3 * r.rms_after_m, r.calibrated ? "" : "  (too few echoes: not calibrated)");
@@ -95,10 +95,10 @@ void LogTable(const calibration::RangerCalibration& c) {
 }
 
 /// The vehicle file as read, with the calibrated mounts; a relative recommended_filter re-pointed.
-std::string CalibratedVehicleJson(const CalibrateOptions& o, const calibration::RangerCalibration& c) {
+std::string CalibratedVehicleJson(const CalibrateOptions& o, const calibration::RangerMountFit& c) {
   nlohmann::ordered_json document = nlohmann::ordered_json::parse(ReadText(o.vehicle_path));
   for (auto& sensor : document.at("ultrasonic")) {
-    for (const calibration::RangerEstimate& r : c.rangers) {
+    for (const calibration::RangerMountEstimate& r : c.rangers) {
       if (!r.calibrated || sensor.at("name") != r.name) continue;
       sensor["position_m"][0] = r.lever_arm_m.x();
       sensor["position_m"][1] = r.lever_arm_m.y();
@@ -138,7 +138,7 @@ void RunCalibrate(const CalibrateOptions& o) {
       calibration::ReadDriveRecord(log, o.log_path, vehicle_file.vehicle, filter.config, config.knot_interval_s);
   spdlog::info("reference: {} smoothed poses from {:.1f} to {:.1f} s; {} echoes", drive.knots.size(),
                drive.knots.front().time_s, drive.knots.back().time_s, drive.echoes.size());
-  const calibration::RangerCalibration result =
+  const calibration::RangerMountFit result =
       calibration::CalibrateRangers(drive, map, vehicle_file.vehicle, filter.config, config);
   LogTable(result);
   std::unique_ptr<mapio::OutputFile> vehicle_out;

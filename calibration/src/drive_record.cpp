@@ -36,7 +36,6 @@ ReferenceKnot KnotOf(const formats::EstimateRecord& estimate) {
   ReferenceKnot knot;
   knot.time_s = estimate.time_s;
   knot.pose << estimate.position_m, *estimate.heading_rad;
-  knot.covariance = *estimate.covariance;
   return knot;
 }
 
@@ -98,7 +97,7 @@ DriveRecord ReadDriveRecord(std::istream& log, const std::string& source, const 
     throw DriveRecordError(source + ": the filter never initialised (no GNSS baseline): no reference trajectory");
   }
   for (const formats::EstimateRecord& estimate : session.FinishSmoothing()) {
-    if (estimate.heading_rad && estimate.covariance) record.knots.push_back(KnotOf(estimate));
+    if (estimate.heading_rad) record.knots.push_back(KnotOf(estimate));
   }
   if (record.knots.size() < 2) {
     throw DriveRecordError(source + ": fewer than two reference poses: the drive is too short to calibrate");

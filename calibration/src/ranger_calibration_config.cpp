@@ -1,5 +1,5 @@
 // The ranger calibration's configuration: a JSON overlay on the defaults, and its checks
-// (ranger_calibration.hpp).
+// (ranger_calibration.hpp); and CalibrateRangers, which runs the fit on a recorded drive.
 #include "rowloc/calibration/ranger_calibration.hpp"
 
 #include <nlohmann/json.hpp>
@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -16,8 +17,9 @@ namespace {
 
 using Field = std::variant<double*, int*, std::size_t*, bool*>;
 
-std::vector<std::pair<const char*, Field>> Fields(RangerCalibrationConfig& c) {
-  return {{"knot_interval_s", &c.knot_interval_s},
+std::vector<std::pair<const char*, Field>> Fields(RangerCalibrationConfig& config) {
+  localization::RangerMountFitConfig& c = config.fit;
+  return {{"knot_interval_s", &config.knot_interval_s},
           {"association_gate_m", &c.association_gate_m},
           {"refined_gate_m", &c.refined_gate_m},
           {"range_sigma_m", &c.range_sigma_m},
@@ -89,35 +91,46 @@ RangerCalibrationConfig ParseRangerCalibrationConfig(const std::string& json_tex
 }
 
 void ValidateRangerCalibrationConfig(const RangerCalibrationConfig& c) {
-  const std::pair<const char*, double> positive[] = {
-      {"knot_interval_s", c.knot_interval_s},
-      {"association_gate_m", c.association_gate_m},
-      {"refined_gate_m", c.refined_gate_m},
-      {"range_sigma_m", c.range_sigma_m},
-      {"huber_sigmas", c.huber_sigmas},
-      {"position_walk_mps_per_sqrt_s", c.position_walk_mps_per_sqrt_s},
-      {"heading_walk_rad_per_sqrt_s", c.heading_walk_rad_per_sqrt_s},
-      {"position_anchor_sigma_m", c.position_anchor_sigma_m},
-      {"heading_anchor_sigma_rad", c.heading_anchor_sigma_rad},
-      {"mount_prior_scale_m", c.mount_prior_scale_m},
-      {"max_knot_gap_s", c.max_knot_gap_s}};
-  for (const auto& [name, value] : positive) {
-    if (!PositiveFinite(value)) throw RangerCalibrationError(std::string(name) + " must be positive and finite");
+  if (!PositiveFinite(c.knot_interval_s)) throw RangerCalibrationError("knot_interval_s must be positive and finite");
+  try {
+    localization::ValidateRangerMountFitConfig(c.fit);
+  } catch (const localization::RangerMountFitError& e) {
+    throw RangerCalibrationError(e.what());
   }
-  if (c.refined_gate_m > c.association_gate_m) {
-    throw RangerCalibrationError("refined_gate_m must not exceed association_gate_m");
-  }
-  if (c.max_knot_gap_s < c.knot_interval_s) {
+  if (c.fit.max_knot_gap_s < c.knot_interval_s) {
     throw RangerCalibrationError("max_knot_gap_s must be at least knot_interval_s");
   }
-  if (c.outer_iterations < 1 || c.outer_iterations > 20) {
-    throw RangerCalibrationError("outer_iterations must be from 1 to 20");
+}
+
+RangerMountFit CalibrateRangers(const DriveRecord& drive, const geometry::RowMap& map,
+                                const mapio::VehicleConfig& vehicle, const localization::FilterConfig& filter,
+                                const RangerCalibrationConfig& config) {
+  ValidateRangerCalibrationConfig(config);
+  if (vehicle.ultrasonic.empty()) {
+    throw RangerCalibrationError("the vehicle '" + vehicle.name + "' has no ultrasonic sensor to calibrate");
   }
-  if (!(c.min_associated_fraction >= 0.0 && c.min_associated_fraction <= 1.0)) {
-    throw RangerCalibrationError("min_associated_fraction must be from 0 to 1");
+  std::optional<localization::RowMapRanging> ranging;
+  try {
+    ranging.emplace(map, drive.origin, filter.map_aided.row_smoothing_m);
+  } catch (const std::invalid_argument& e) {
+    throw RangerCalibrationError(std::string("row map: ") + e.what());
   }
-  if (c.max_solver_iterations < 1) throw RangerCalibrationError("max_solver_iterations must be at least 1");
-  if (c.min_echoes_per_ranger < 1) throw RangerCalibrationError("min_echoes_per_ranger must be at least 1");
+  try {
+    return localization::FitRangerMounts(*ranging, vehicle.ultrasonic, filter.map_aided.cone_half_angle_rad,
+                                         filter.map_aided.max_range_m, drive.knots, drive.echoes, config.fit);
+  } catch (const localization::RangerMountFitError& e) {
+    throw RangerCalibrationError(e.what());
+  }
+}
+
+mapio::VehicleConfig ApplyRangerCalibration(mapio::VehicleConfig vehicle, const RangerMountFit& calibration) {
+  for (const RangerMountEstimate& r : calibration.rangers) {
+    if (!r.calibrated) continue;
+    for (mapio::SensorMount& m : vehicle.ultrasonic) {
+      if (m.name == r.name) m.position_m.head<2>() = r.lever_arm_m;
+    }
+  }
+  return vehicle;
 }
 
 }  // namespace rowloc::calibration

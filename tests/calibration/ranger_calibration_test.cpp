@@ -3,7 +3,6 @@
 // offsets, leave the right mounts alone, refuse a map of another field, and say why on bad input.
 #include "rowloc/calibration/drive_record.hpp"
 #include "rowloc/calibration/ranger_calibration.hpp"
-#include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
@@ -59,13 +58,13 @@ DriveRecord Record(const std::string& sensors, const mapio::VehicleConfig& vehic
   return ReadDriveRecord(log, "drive", vehicle, localization::FilterConfig{}, knot_interval_s);
 }
 
-RangerCalibration Calibrate(const mapio::VehicleConfig& vehicle, const RangerCalibrationConfig& config = {}) {
+RangerMountFit Calibrate(const mapio::VehicleConfig& vehicle, const RangerCalibrationConfig& config = {}) {
   const Drive& drive = OneLaneDrive();
   return CalibrateRangers(Record(drive.sensors, vehicle), drive.map, vehicle, localization::FilterConfig{}, config);
 }
 
-const RangerEstimate& Ranger(const RangerCalibration& c, const std::string& name) {
-  for (const RangerEstimate& r : c.rangers) {
+const RangerMountEstimate& Ranger(const RangerMountFit& c, const std::string& name) {
+  for (const RangerMountEstimate& r : c.rangers) {
     if (r.name == name) return r;
   }
   throw std::out_of_range(name);
@@ -74,9 +73,9 @@ const RangerEstimate& Ranger(const RangerCalibration& c, const std::string& name
 TEST(RangerCalibration, FindsA5cmMountErrorWithin5mmAndLeavesTheOtherMounts) {
   const mapio::VehicleConfig truth = OneLaneDrive().scenario.vehicle;
   // Configured 5 cm further out than it is: the sensor is 5 cm back along its (+y) beam.
-  const RangerCalibration c = Calibrate(WithMountMoved(truth, "us_front_left", 0.0, 0.05));
+  const RangerMountFit c = Calibrate(WithMountMoved(truth, "us_front_left", 0.0, 0.05));
   ASSERT_EQ(c.rangers.size(), 4u);
-  for (const RangerEstimate& r : c.rangers) {
+  for (const RangerMountEstimate& r : c.rangers) {
     SCOPED_TRACE(r.name);
     EXPECT_TRUE(r.calibrated);
     EXPECT_GT(r.echoes_used, 500u);
@@ -97,8 +96,8 @@ TEST(RangerCalibration, FindsA5cmMountErrorWithin5mmAndLeavesTheOtherMounts) {
 }
 
 TEST(RangerCalibration, RightMountsStayWithin3mm) {
-  const RangerCalibration c = Calibrate(OneLaneDrive().scenario.vehicle);
-  for (const RangerEstimate& r : c.rangers) {
+  const RangerMountFit c = Calibrate(OneLaneDrive().scenario.vehicle);
+  for (const RangerMountEstimate& r : c.rangers) {
     SCOPED_TRACE(r.name);
     EXPECT_NEAR(r.along_beam_m, 0.0, 0.003);
   }
@@ -109,7 +108,7 @@ TEST(RangerCalibration, RightMountsStayWithin3mm) {
 
 TEST(RangerCalibration, FindsAnInwardErrorOnTheRightSide) {
   // us_rear_right (beam -y) configured at y = -0.45: 5 cm inward; its sensor is 5 cm further along the beam.
-  const RangerCalibration c = Calibrate(WithMountMoved(OneLaneDrive().scenario.vehicle, "us_rear_right", 0.0, 0.05));
+  const RangerMountFit c = Calibrate(WithMountMoved(OneLaneDrive().scenario.vehicle, "us_rear_right", 0.0, 0.05));
   EXPECT_NEAR(Ranger(c, "us_rear_right").along_beam_m, 0.05, 0.005);
   EXPECT_NEAR(Ranger(c, "us_rear_right").lever_arm_m.y(), -0.5, 0.005);
   EXPECT_NEAR(Ranger(c, "us_front_left").along_beam_m, 0.0, 0.005);
@@ -117,9 +116,9 @@ TEST(RangerCalibration, FindsAnInwardErrorOnTheRightSide) {
 
 TEST(RangerCalibration, AcrossTheBeamOnRequestWithItsUncertainty) {
   RangerCalibrationConfig config;
-  config.estimate_across_beam = true;
-  const RangerCalibration c = Calibrate(OneLaneDrive().scenario.vehicle, config);
-  for (const RangerEstimate& r : c.rangers) {
+  config.fit.estimate_across_beam = true;
+  const RangerMountFit c = Calibrate(OneLaneDrive().scenario.vehicle, config);
+  for (const RangerMountEstimate& r : c.rangers) {
     SCOPED_TRACE(r.name);
     EXPECT_NEAR(r.along_beam_m, 0.0, 0.003);
     // Along the rows only row ends inform: weakly observable, but bounded and with a sigma.
@@ -145,12 +144,12 @@ TEST(RangerCalibration, RefusesTheMapOfAnotherField) {
 
 TEST(RangerCalibration, AppliesOnlyCalibratedMountsAndKeepsHeightAndYaw) {
   const mapio::VehicleConfig vehicle = OneLaneDrive().scenario.vehicle;
-  RangerCalibration c;
-  RangerEstimate moved;
+  RangerMountFit c;
+  RangerMountEstimate moved;
   moved.name = "us_front_left";
   moved.calibrated = true;
   moved.lever_arm_m = {0.7, 0.45};
-  RangerEstimate kept = moved;
+  RangerMountEstimate kept = moved;
   kept.name = "us_rear_left";
   kept.calibrated = false;
   c.rangers = {moved, kept};
@@ -158,58 +157,6 @@ TEST(RangerCalibration, AppliesOnlyCalibratedMountsAndKeepsHeightAndYaw) {
   EXPECT_EQ(out.ultrasonic[0].position_m, Eigen::Vector3d(0.7, 0.45, vehicle.ultrasonic[0].position_m.z()));
   EXPECT_EQ(out.ultrasonic[0].yaw_rad, vehicle.ultrasonic[0].yaw_rad);
   EXPECT_EQ(out.ultrasonic[1], vehicle.ultrasonic[1]);
-}
-
-/// Two straight closed rows along x (canopies 0.4 m wide at y = 0 and 2.5 m, 50 m long): the
-/// range model of the map-aided update is exact on them (no smoothing of a curved outline).
-geometry::RowMap StraightRows() {
-  geometry::RowMap map;
-  map.origin = {45.0, 7.0, 200.0};
-  for (const double y : {0.0, 2.5}) {
-    geometry::Row row;
-    row.id = "row-" + std::to_string(map.rows.size() + 1);
-    row.closed = true;
-    row.points_m = {{0.0, y - 0.2}, {50.0, y - 0.2}, {50.0, y + 0.2}, {0.0, y + 0.2}};
-    map.rows.push_back(row);
-  }
-  return map;
-}
-
-TEST(RangerCalibration, MountJacobianMatchesCentralDifferencesOfTheRangeModel) {
-  const geometry::RowMap map = StraightRows();
-  const localization::RowMapRanging ranging(map, map.origin, 2.0);
-  const double h = 1e-6;
-  // Inside the lane, straight and turned: perpendicular (|phi| below the cone's half aperture) and
-  // cone-edge geometries (0.3 rad), for each of the four mounts, along and across each beam.
-  for (const double phi : {0.0, 0.05, 0.3, -0.3}) {
-    const Eigen::Vector3d pose(20.0, 1.25, phi);
-    for (const mapio::SensorMount& m : OneLaneDrive().scenario.vehicle.ultrasonic) {
-      SCOPED_TRACE(m.name + " phi " + std::to_string(phi));
-      const localization::RangeSensorMount mount{m.position_m.head<2>(), m.yaw_rad, 0.1309};
-      const auto range = [&](const Eigen::Vector2d& lever_arm) {
-        auto moved = mount;
-        moved.lever_arm_m = lever_arm;
-        const auto candidates = ranging.Candidates(pose, moved, 4.0, 0.01);
-        EXPECT_FALSE(candidates.empty());
-        return candidates.empty() ? std::nan("") : candidates.front().predicted_range_m;
-      };
-      const auto at = ranging.Candidates(pose, mount, 4.0, 0.01);
-      ASSERT_FALSE(at.empty());
-      const Eigen::RowVector2d jacobian = MountRangeJacobian(at.front().jacobian, phi, m.yaw_rad);
-      const Eigen::Vector2d beam(std::cos(m.yaw_rad), std::sin(m.yaw_rad));
-      const Eigen::Vector2d across(-beam.y(), beam.x());
-      for (int k = 0; k < 2; ++k) {
-        const Eigen::Vector2d step = h * (k == 0 ? beam : across);
-        const double numeric = (range(mount.lever_arm_m + step) - range(mount.lever_arm_m - step)) / (2.0 * h);
-        EXPECT_NEAR(jacobian[k], numeric, 1e-6);
-      }
-      // The normal inside the cone: the echo comes back along the normal, so a step along the beam
-      // shortens the range by cos(angle between beam and normal) = cos(phi) here.
-      if (std::abs(phi) < 0.1) {
-        EXPECT_NEAR(jacobian[0], -std::cos(phi), 1e-9);
-      }
-    }
-  }
 }
 
 TEST(DriveRecord, HoldsEveryEchoAndASmoothedReference) {
@@ -274,8 +221,8 @@ TEST(RangerCalibrationConfig, OverlayOnTheDefaultsWithClearErrors) {
   const RangerCalibrationConfig defaults;
   const RangerCalibrationConfig c =
       ParseRangerCalibrationConfig(R"({"range_sigma_m": 0.01, "estimate_across_beam": true})", "cal.json");
-  EXPECT_EQ(c.range_sigma_m, 0.01);
-  EXPECT_TRUE(c.estimate_across_beam);
+  EXPECT_EQ(c.fit.range_sigma_m, 0.01);
+  EXPECT_TRUE(c.fit.estimate_across_beam);
   EXPECT_EQ(c.knot_interval_s, defaults.knot_interval_s);
   const auto error = [](const std::string& text) {
     try {
@@ -296,7 +243,7 @@ TEST(RangerCalibrationConfig, OverlayOnTheDefaultsWithClearErrors) {
   EXPECT_THAT(error(R"({"min_associated_fraction": 2})"), HasSubstr("from 0 to 1"));
   EXPECT_THAT(error("[1, 2]"), HasSubstr("a JSON object is expected"));
   EXPECT_THAT(error("{"), HasSubstr("cal.json: not JSON"));
-  EXPECT_THROW(CalibrateRangers({}, {}, OneLaneDrive().scenario.vehicle, {}, RangerCalibrationConfig{.knot_interval_s = 0}),
+  EXPECT_THROW(CalibrateRangers({}, {}, OneLaneDrive().scenario.vehicle, {}, RangerCalibrationConfig{.knot_interval_s = 0, .fit = {}}),
                RangerCalibrationError);
 }
 

@@ -12,6 +12,7 @@
 #include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/ranger_mount_fit.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
 #include <Eigen/Core>
@@ -24,19 +25,8 @@
 
 namespace rowloc::calibration {
 
-/// One smoothed pose of the reference trajectory.
-struct ReferenceKnot {
-  double time_s = 0.0;
-  Eigen::Vector3d pose = Eigen::Vector3d::Zero();  ///< (X, Y, phi) in the log's local ENU frame, (m, m, rad)
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of the pose, (m, m, rad)^2
-};
-
-/// One echo of the log (a ping with a range).
-struct EchoRecord {
-  double time_s = 0.0;
-  std::size_t ranger = 0;  ///< index in the vehicle's ultrasonic list
-  double range_m = 0.0;    ///< > 0
-};
+using localization::EchoRecord;
+using localization::ReferenceKnot;
 
 struct DriveRecord {
   geometry::GeoOrigin origin;          ///< the log's local frame

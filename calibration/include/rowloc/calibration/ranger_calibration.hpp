@@ -1,76 +1,27 @@
-// Ranger mount calibration from a recorded drive along a known row map (issue 28): where each
-// ultrasonic ranger really sits on the body, as one Ceres least-squares problem over every echo.
-//
-// Unknowns. Per ranger i a correction c_i = (along, across) its beam (m) of its configured lever arm
-// l_i (body frame x forward, y left): the mount is l_i + dl_i, dl_i = B_i c_i, B_i = [beam, beam
-// rotated +90 degrees] (the across component only with estimate_across_beam); per knot k of the reference trajectory (drive_record.hpp) a pose correction
-// dx_k = (dX, dY, dphi) (m, m, rad), linear in time between knots: the drive's pose at time t is
-// x_ref(t) + dx(t).
-//
-// Residuals (weights are 1-sigma values of the configuration, RangerCalibrationConfig):
-//  - echo j of ranger i at time t (Huber loss at huber_sigmas):
-//      (d_j - r(x_ref(t) + dx(t), l_i + dl_i)) / sigma_j,   sigma_j^2 = range_sigma^2 + sigma_map^2,
-//    with r the range model of the map-aided update (localization/map_aided_ranging.hpp: the nearest
-//    row surface in the sound cone, the row's smoothed direction), linearized at the current
-//    estimate: r ~ r0 + H (dx - dx0) + H_p R(phi) B_i (c_i - c_i0), H = dr/d(X, Y, phi), H_p its
-//    position part (moving the sensor by R(phi) dl moves it like the pose does). The problem is
-//    re-linearized and the echoes re-associated outer_iterations times.
-//  - motion between knots k and k+1 (dt apart): the reference's displacement rotated by the heading
-//    correction, and the heading correction a random walk:
-//      (dp_{k+1} - dp_k - (R(dphi_k) - I) (p_ref,k+1 - p_ref,k)) / (q_p sqrt(dt)),
-//      (dphi_{k+1} - dphi_k) / (q_phi sqrt(dt)).
-//    This ties the heading to the across-row motion (a heading error makes the vehicle drift across
-//    the row as it drives), which makes a ranger's offset observable apart from the heading.
-//  - anchor: dx_k / (sigma_position, sigma_position, sigma_heading): weak; keeps the corrections
-//    bounded where no echo sees a row.
-//  - mount prior: c_i / mount_prior_scale_m under a soft-L1 loss: most mounts are right.
-//
-// Observability (the report states it): a ranger's offset along its beam changes every range it
-// measures by the same amount and is observable; across its beam only where the geometry turns
-// (row ends, curved rows). One combination is never observable from the echoes: every ranger
-// moved by the same body-frame shift is the vehicle moved the other way (the pose corrections take
-// it). The soft-L1 prior settles it the way a user expects: the fewest mounts moved (the offset
-// of one wrong ranger among correct ones comes out on that ranger, not spread over all). A map whose
-// lane is narrower than the canopy the rangers hear (every ranger reads short) is the same for the
-// echoes as every ranger mounted further out; it is reported as the common offset along the beams.
+// Ranger mount calibration from a recorded drive along a known row map (issue 28): `rowloc
+// calibrate`. The drive is read into a DriveRecord (drive_record.hpp: the echoes, and the filter's
+// smoothed trajectory without the rangers as the reference), then the mounts are fitted by
+// localization::FitRangerMounts (localization/ranger_mount_fit.hpp states the least-squares problem,
+// its observability and why most mounts are assumed right).
 #pragma once
 
 #include "rowloc/calibration/drive_record.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/ranger_mount_fit.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
-#include <Eigen/Core>
-
-#include <cstddef>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 namespace rowloc::calibration {
 
+using localization::RangerMountEstimate;
+using localization::RangerMountFit;
+
 struct RangerCalibrationConfig {
-  double knot_interval_s = 0.2;               ///< reference pose every this much log time, s
-  double association_gate_m = 0.3;            ///< first pass: |measured - predicted range| above it: not used
-  double refined_gate_m = 0.08;               ///< later passes (the corrections known), m
-  double range_sigma_m = 0.005;               ///< echo noise plus canopy roughness, m (the map's own sigma added)
-  double huber_sigmas = 3.0;                  ///< echo residuals beyond this many sigmas count linearly
-  double position_walk_mps_per_sqrt_s = 0.01; ///< q_p: the reference's motion error, m / sqrt(s)
-  double heading_walk_rad_per_sqrt_s = 0.002; ///< q_phi, rad / sqrt(s)
-  double position_anchor_sigma_m = 1.0;       ///< the reference's absolute error (GNSS-grade), m
-  double heading_anchor_sigma_rad = 0.1;
-  double mount_prior_scale_m = 0.002;         ///< soft-L1 scale of the mount corrections, m
-  double max_knot_gap_s = 1.0;                ///< knots further apart: no motion residual (a re-initialisation)
-  int outer_iterations = 3;                   ///< re-linearizations (and re-associations), >= 1
-  int max_solver_iterations = 100;            ///< Ceres iterations per pass
-  std::size_t min_echoes_per_ranger = 50;     ///< fewer: the ranger keeps its configured mount
-  /// Fewer of the echoes in the reference's span associated with a row (last pass): refused, the map
-  /// is not of this field (or a mount is off by more than association_gate_m).
-  double min_associated_fraction = 0.5;
-  /// Also estimate each mount across its beam (along the rows for a side-looking ranger): observable
-  /// only at row ends and on curved rows; on straight rows the mount prior holds most of it (a 5 cm
-  /// error came out as 1-2 cm), so it is off by default and the report says so.
-  bool estimate_across_beam = false;
+  double knot_interval_s = 0.2;  ///< a reference pose every this much log time, s
+  localization::RangerMountFitConfig fit;
 };
 
 class RangerCalibrationError : public std::runtime_error {
@@ -78,61 +29,22 @@ class RangerCalibrationError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Reads a configuration overlay (JSON object: any subset of the keys above, by their C++ names)
-/// on the defaults. Throws RangerCalibrationError for an unknown key, a wrong type or a value
-/// outside its domain (non-positive sigma or interval, refined gate above the first gate, ...).
+/// Reads a configuration overlay: a JSON object with any subset of the keys knot_interval_s and
+/// those of RangerMountFitConfig, by their C++ names (docs/calibration.md), on the defaults. Throws
+/// RangerCalibrationError for an unknown key, a wrong type or a value outside its domain.
 RangerCalibrationConfig ParseRangerCalibrationConfig(const std::string& json_text, const std::string& source);
 /// Throws RangerCalibrationError when a value is outside its domain.
 void ValidateRangerCalibrationConfig(const RangerCalibrationConfig& config);
 
-/// The result for one ranger.
-struct RangerEstimate {
-  std::string name;
-  Eigen::Vector2d configured_lever_arm_m = Eigen::Vector2d::Zero();  ///< body (x, y) of the vehicle file
-  Eigen::Vector2d lever_arm_m = Eigen::Vector2d::Zero();             ///< estimated body (x, y)
-  double along_beam_m = 0.0;   ///< correction along the beam (+: the sensor is further towards what it hears)
-  double across_beam_m = 0.0;  ///< correction across the beam (+: 90 degrees ccw of the beam)
-  /// 1-sigma of along_beam_m / across_beam_m from the problem's curvature (Ceres covariance); NaN
-  /// where it could not be computed. Conditional on the other rangers' priors (see the header comment).
-  double along_beam_sigma_m = 0.0;
-  double across_beam_sigma_m = 0.0;
-  bool calibrated = false;       ///< false: fewer than min_echoes_per_ranger echoes; kept as configured
-  std::size_t echoes = 0;        ///< of this ranger in the drive's calibrated span
-  std::size_t echoes_used = 0;   ///< associated with a row in the last pass
-  double rms_before_m = 0.0;     ///< residual RMS of the used echoes at the configured mount (first pass)
-  double rms_after_m = 0.0;      ///< at the estimate (last pass)
-};
-
-struct RangerCalibration {
-  std::vector<RangerEstimate> rangers;  ///< vehicle order
-  /// The mean along-beam correction over the calibrated rangers: indistinguishable from the map's
-  /// lanes being narrower (+) or wider than the canopy the rangers hear.
-  double common_along_beam_m = 0.0;
-  std::size_t knots = 0;
-  std::size_t echoes_used = 0;
-  std::size_t echoes_unassociated = 0;  ///< no row within the gate (gaps, other rows, outside the map)
-  std::size_t echoes_outside_reference = 0;  ///< before the filter initialised, after its end, in a gap
-  double position_correction_rms_m = 0.0;    ///< RMS of the knots' position corrections: how far the reference was off
-  int solver_iterations = 0;                 ///< over all passes
-  std::string solver_report;                 ///< Ceres's brief report of the last pass
-};
-
-/// Solves the problem of the header comment. origin: the drive's local frame (DriveRecord::origin);
-/// the map may be in another (re-expressed as the filter does). filter supplies the sound cone and
-/// the row smoothing (filter.map_aided). Throws RangerCalibrationError for an invalid configuration,
-/// a map the filter cannot use, a drive whose echoes never meet a row, and std::invalid_argument for
-/// a record that does not match the vehicle (a ranger index out of range).
-RangerCalibration CalibrateRangers(const DriveRecord& drive, const geometry::RowMap& map,
-                                   const mapio::VehicleConfig& vehicle, const localization::FilterConfig& filter,
-                                   const RangerCalibrationConfig& config = {});
-
-/// dr / d(along, across) of a mount correction: moving the sensor by B c in the body moves it by
-/// R(phi) B c in the world, as a pose translation would: H_p R(phi) B (H_p = pose_jacobian's
-/// position part, dr/d(X, Y); phi the heading; B the beam frame of beam_angle_rad).
-Eigen::RowVector2d MountRangeJacobian(const Eigen::RowVector3d& pose_jacobian, double heading_rad,
-                                      double beam_angle_rad);
+/// Fits the vehicle's ranger mounts to the drive against the map. The map may be in another local
+/// frame than the drive's (re-expressed as the filter does); filter.map_aided supplies the sound
+/// cone, the range limit and the row smoothing. Throws RangerCalibrationError for an invalid map or
+/// configuration, a vehicle without rangers, or a drive whose echoes mostly meet no row of the map.
+RangerMountFit CalibrateRangers(const DriveRecord& drive, const geometry::RowMap& map,
+                                const mapio::VehicleConfig& vehicle, const localization::FilterConfig& filter,
+                                const RangerCalibrationConfig& config = {});
 
 /// The vehicle with every calibrated ranger's mount moved to its estimate (height and yaw kept).
-mapio::VehicleConfig ApplyRangerCalibration(mapio::VehicleConfig vehicle, const RangerCalibration& calibration);
+mapio::VehicleConfig ApplyRangerCalibration(mapio::VehicleConfig vehicle, const RangerMountFit& calibration);
 
 }  // namespace rowloc::calibration

@@ -1,8 +1,7 @@
-// Ranger mount calibration (ranger_calibration.hpp states the problem): association of the echoes,
-// the Ceres problem, and the result.
-#include "rowloc/calibration/ranger_calibration.hpp"
+// Ranger mount fit (ranger_mount_fit.hpp states the problem): association of the echoes, the Ceres
+// problem, and the result.
+#include "rowloc/localization/ranger_mount_fit.hpp"
 
-#include "rowloc/localization/map_aided_ranging.hpp"
 #include "rowloc/localization/range_to_line_model.hpp"
 
 #include <ceres/ceres.h>
@@ -14,12 +13,9 @@
 #include <numeric>
 #include <optional>
 
-namespace rowloc::calibration {
+namespace rowloc::localization {
 namespace {
 
-using localization::EchoCandidate;
-using localization::RangeSensorMount;
-using localization::RowMapRanging;
 using Pose3 = std::array<double, 3>;   // (dX, dY, dphi) of one knot
 using Mount2 = std::array<double, 2>;  // (along, across) its beam: the correction of one ranger's mount
 
@@ -106,18 +102,21 @@ struct MountPriorCost {
 /// The problem's data and its current estimate.
 class Calibrator {
  public:
-  Calibrator(const DriveRecord& drive, const geometry::RowMap& map, const mapio::VehicleConfig& vehicle,
-             const localization::FilterConfig& filter, const RangerCalibrationConfig& config)
-      : drive_(drive),
-        ranging_(MakeRanging(map, drive.origin, filter.map_aided.row_smoothing_m)),
-        filter_(filter),
+  Calibrator(const RowMapRanging& ranging, const std::vector<mapio::SensorMount>& mounts, double cone_half_angle_rad,
+             double max_range_m, const std::vector<ReferenceKnot>& knots, const std::vector<EchoRecord>& echoes,
+             const RangerMountFitConfig& config)
+      : ranging_(ranging),
+        knots_(knots),
+        echoes_(echoes),
+        max_range_m_(max_range_m),
         config_(config),
-        pose_correction_(drive.knots.size(), Pose3{0.0, 0.0, 0.0}),
-        mount_correction_(vehicle.ultrasonic.size(), Mount2{0.0, 0.0}) {
-    for (const mapio::SensorMount& m : vehicle.ultrasonic) {
-      mounts_.push_back(RangeSensorMount{m.position_m.head<2>(), m.yaw_rad, filter.map_aided.cone_half_angle_rad});
+        pose_correction_(knots.size(), Pose3{0.0, 0.0, 0.0}),
+        mount_correction_(mounts.size(), Mount2{0.0, 0.0}) {
+    for (const mapio::SensorMount& m : mounts) {
+      names_.push_back(m.name);
+      mounts_.push_back(RangeSensorMount{m.position_m.head<2>(), m.yaw_rad, cone_half_angle_rad});
     }
-    for (const EchoRecord& e : drive.echoes) {
+    for (const EchoRecord& e : echoes) {
       if (e.ranger >= mounts_.size()) {
         throw std::invalid_argument("echo of ranger " + std::to_string(e.ranger) + ": the vehicle lists " +
                                     std::to_string(mounts_.size()));
@@ -125,8 +124,8 @@ class Calibrator {
     }
   }
 
-  RangerCalibration Run(const mapio::VehicleConfig& vehicle) {
-    RangerCalibration result;
+  RangerMountFit Run() {
+    RangerMountFit result;
     std::vector<double> rms_before;
     for (int pass = 0; pass < config_.outer_iterations; ++pass) {
       const double gate = pass == 0 ? config_.association_gate_m : config_.refined_gate_m;
@@ -139,22 +138,14 @@ class Calibrator {
     const std::vector<LinearizedEcho> final_echoes = Associate(config_.refined_gate_m, result);
     CheckAssociation(final_echoes.size(), result);
     const std::vector<double> rms_after = ResidualRms(final_echoes);
-    Report(vehicle, final_echoes, rms_before, rms_after, result);
+    Report(final_echoes, rms_before, rms_after, result);
     return result;
   }
 
  private:
-  static RowMapRanging MakeRanging(const geometry::RowMap& map, const geometry::GeoOrigin& origin, double smoothing) {
-    try {
-      return RowMapRanging(map, origin, smoothing);
-    } catch (const std::invalid_argument& e) {
-      throw RangerCalibrationError(std::string("row map: ") + e.what());
-    }
-  }
-
   /// The knot interval holding time t (knot k and the weight of k + 1), or none.
   std::optional<std::pair<std::size_t, double>> Interval(double t) const {
-    const std::vector<ReferenceKnot>& knots = drive_.knots;
+    const std::vector<ReferenceKnot>& knots = knots_;
     if (t < knots.front().time_s || t > knots.back().time_s) return std::nullopt;
     auto it = std::upper_bound(knots.begin(), knots.end(), t,
                                [](double v, const ReferenceKnot& k) { return v < k.time_s; });
@@ -172,10 +163,10 @@ class Calibrator {
   static Eigen::Vector3d AsVector(const Pose3& p) { return {p[0], p[1], p[2]}; }
 
   /// Every echo of the span with its nearest candidate within `gate` at the current estimate.
-  std::vector<LinearizedEcho> Associate(double gate, RangerCalibration& counts) {
+  std::vector<LinearizedEcho> Associate(double gate, RangerMountFit& counts) {
     std::vector<LinearizedEcho> out;
     counts.echoes_unassociated = counts.echoes_outside_reference = 0;
-    for (const EchoRecord& e : drive_.echoes) {
+    for (const EchoRecord& e : echoes_) {
       const auto interval = Interval(e.time_s);
       if (!interval) {
         ++counts.echoes_outside_reference;
@@ -189,11 +180,11 @@ class Calibrator {
       le.measured_m = e.range_m;
       le.pose_correction0 = (1.0 - w) * AsVector(pose_correction_[k]) + w * AsVector(pose_correction_[k + 1]);
       le.mount_correction0 = {mount_correction_[e.ranger][0], mount_correction_[e.ranger][1]};
-      Eigen::Vector3d pose = Interpolate(drive_.knots[k].pose, drive_.knots[k + 1].pose, w) + le.pose_correction0;
+      Eigen::Vector3d pose = Interpolate(knots_[k].pose, knots_[k + 1].pose, w) + le.pose_correction0;
       RangeSensorMount mount = mounts_[e.ranger];
       mount.lever_arm_m += BeamFrame(mount) * le.mount_correction0;
       const std::vector<EchoCandidate>& candidates =
-          ranging_.Candidates(pose, mount, filter_.map_aided.max_range_m, gate, buffers_);
+          ranging_.Candidates(pose, mount, max_range_m_, gate, buffers_);
       const EchoCandidate* best = nullptr;
       for (const EchoCandidate& c : candidates) {
         if (std::abs(e.range_m - c.predicted_range_m) > gate) continue;
@@ -213,14 +204,14 @@ class Calibrator {
   }
 
   /// Refuses a drive whose echoes mostly meet no row of the map.
-  void CheckAssociation(std::size_t used, const RangerCalibration& counts) const {
+  void CheckAssociation(std::size_t used, const RangerMountFit& counts) const {
     const std::size_t span = used + counts.echoes_unassociated;
     if (span == 0) {
-      throw RangerCalibrationError("no echo falls inside the reference trajectory's span (did the filter initialise?)");
+      throw RangerMountFitError("no echo falls inside the reference trajectory's span (did the filter initialise?)");
     }
     const double fraction = static_cast<double>(used) / static_cast<double>(span);
     if (fraction < config_.min_associated_fraction) {
-      throw RangerCalibrationError(
+      throw RangerMountFitError(
           "only " + std::to_string(used) + " of " + std::to_string(span) + " echoes meet a row of the map within " +
           std::to_string(config_.refined_gate_m) + " m: the map is not of this field, or a mount is off by more than "
           "association_gate_m (" + std::to_string(config_.association_gate_m) + " m)");
@@ -248,7 +239,7 @@ class Calibrator {
   }
 
   void AddMotionAndAnchors(ceres::Problem& problem) {
-    const std::vector<ReferenceKnot>& knots = drive_.knots;
+    const std::vector<ReferenceKnot>& knots = knots_;
     const std::array<double, 3> anchor{config_.position_anchor_sigma_m, config_.position_anchor_sigma_m,
                                        config_.heading_anchor_sigma_rad};
     for (std::size_t k = 0; k < knots.size(); ++k) {
@@ -299,7 +290,7 @@ class Calibrator {
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
     if (summary.termination_type == ceres::FAILURE) {
-      throw RangerCalibrationError("the least-squares solver failed: " + summary.message);
+      throw RangerMountFitError("the least-squares solver failed: " + summary.message);
     }
     last_covariance_ = MountCovariances(problem);
     return summary;
@@ -328,18 +319,18 @@ class Calibrator {
     return out;
   }
 
-  void Report(const mapio::VehicleConfig& vehicle, const std::vector<LinearizedEcho>& echoes,
-              const std::vector<double>& rms_before, const std::vector<double>& rms_after, RangerCalibration& result) {
+  void Report(const std::vector<LinearizedEcho>& echoes,
+              const std::vector<double>& rms_before, const std::vector<double>& rms_after, RangerMountFit& result) {
     const std::vector<std::size_t> used = EchoesPerRanger(echoes);
     std::vector<std::size_t> total(mounts_.size(), 0);
-    for (const EchoRecord& e : drive_.echoes) {
+    for (const EchoRecord& e : echoes_) {
       if (Interval(e.time_s)) ++total[e.ranger];
     }
     double along_sum = 0.0;
     int calibrated = 0;
     for (std::size_t i = 0; i < mounts_.size(); ++i) {
-      RangerEstimate r;
-      r.name = vehicle.ultrasonic[i].name;
+      RangerMountEstimate r;
+      r.name = names_[i];
       r.configured_lever_arm_m = mounts_[i].lever_arm_m;
       const Eigen::Vector2d correction(mount_correction_[i][0], mount_correction_[i][1]);
       r.lever_arm_m = r.configured_lever_arm_m + BeamFrame(mounts_[i]) * correction;
@@ -359,22 +350,24 @@ class Calibrator {
       result.rangers.push_back(r);
     }
     if (calibrated == 0) {
-      throw RangerCalibrationError("no ranger has " + std::to_string(config_.min_echoes_per_ranger) +
+      throw RangerMountFitError("no ranger has " + std::to_string(config_.min_echoes_per_ranger) +
                                    " echoes that meet a row of the map: is it the map of this field?");
     }
     result.common_along_beam_m = along_sum / calibrated;
-    result.knots = drive_.knots.size();
+    result.knots = knots_.size();
     result.echoes_used = echoes.size();
     double sum = 0.0;
     for (const Pose3& p : pose_correction_) sum += p[0] * p[0] + p[1] * p[1];
     result.position_correction_rms_m = std::sqrt(sum / static_cast<double>(pose_correction_.size()));
   }
 
-  const DriveRecord& drive_;
-  RowMapRanging ranging_;
+  const RowMapRanging& ranging_;
   RowMapRanging::Buffers buffers_;
-  const localization::FilterConfig& filter_;
-  RangerCalibrationConfig config_;
+  const std::vector<ReferenceKnot>& knots_;
+  const std::vector<EchoRecord>& echoes_;
+  double max_range_m_;
+  RangerMountFitConfig config_;
+  std::vector<std::string> names_;
   std::vector<RangeSensorMount> mounts_;  ///< configured, vehicle order
   std::vector<Pose3> pose_correction_;    ///< per knot
   std::vector<Mount2> mount_correction_;  ///< per ranger
@@ -384,16 +377,14 @@ class Calibrator {
 
 }  // namespace
 
-RangerCalibration CalibrateRangers(const DriveRecord& drive, const geometry::RowMap& map,
-                                   const mapio::VehicleConfig& vehicle, const localization::FilterConfig& filter,
-                                   const RangerCalibrationConfig& config) {
-  ValidateRangerCalibrationConfig(config);
-  if (vehicle.ultrasonic.empty()) {
-    throw RangerCalibrationError("the vehicle '" + vehicle.name + "' has no ultrasonic sensor to calibrate");
-  }
-  if (drive.knots.size() < 2) throw RangerCalibrationError("the drive has fewer than two reference poses");
-  Calibrator calibrator(drive, map, vehicle, filter, config);
-  return calibrator.Run(vehicle);
+RangerMountFit FitRangerMounts(const RowMapRanging& ranging, const std::vector<mapio::SensorMount>& mounts,
+                               double cone_half_angle_rad, double max_range_m, const std::vector<ReferenceKnot>& knots,
+                               const std::vector<EchoRecord>& echoes, const RangerMountFitConfig& config) {
+  ValidateRangerMountFitConfig(config);
+  if (mounts.empty()) throw RangerMountFitError("no ranger to fit");
+  if (knots.size() < 2) throw RangerMountFitError("fewer than two reference poses");
+  Calibrator calibrator(ranging, mounts, cone_half_angle_rad, max_range_m, knots, echoes, config);
+  return calibrator.Run();
 }
 
 Eigen::RowVector2d MountRangeJacobian(const Eigen::RowVector3d& pose_jacobian, double heading_rad,
@@ -401,14 +392,4 @@ Eigen::RowVector2d MountRangeJacobian(const Eigen::RowVector3d& pose_jacobian, d
   return pose_jacobian.head<2>() * Rotation(heading_rad) * Rotation(beam_angle_rad);
 }
 
-mapio::VehicleConfig ApplyRangerCalibration(mapio::VehicleConfig vehicle, const RangerCalibration& calibration) {
-  for (const RangerEstimate& r : calibration.rangers) {
-    if (!r.calibrated) continue;
-    for (mapio::SensorMount& m : vehicle.ultrasonic) {
-      if (m.name == r.name) m.position_m.head<2>() = r.lever_arm_m;
-    }
-  }
-  return vehicle;
-}
-
-}  // namespace rowloc::calibration
+}  // namespace rowloc::localization
