@@ -34,6 +34,25 @@ std::vector<formats::SensorHealthRecord> SensorHealthOf(const VehicleEkf& ekf) {
   return records;
 }
 
+namespace {
+
+/// The mount check's suspect rangers in the sensor health records (a ranger the filter's own health
+/// already distrusts keeps its state, with the finding added to its reason).
+void AddMountFindings(const RangerMountMonitor& monitor, std::vector<formats::SensorHealthRecord>& records) {
+  for (const RangerMountFinding& f : monitor.suspects()) {
+    const std::string reason = RangerMountMonitor::Reason(f, monitor.config().window_s);
+    const auto it = std::find_if(records.begin(), records.end(),
+                                 [&](const formats::SensorHealthRecord& r) { return r.sensor == f.ranger; });
+    if (it == records.end()) {
+      records.push_back({f.ranger, "suspect", reason, 0, 0, 0, 0});
+    } else {
+      it->reason += "; " + reason;
+    }
+  }
+}
+
+}  // namespace
+
 LocalizationSession::LocalizationSession(mapio::VehicleConfig vehicle, FilterConfig config,
                                          const formats::LogHeader& header, SessionOptions options)
     : vehicle_(vehicle),
@@ -77,6 +96,7 @@ formats::EstimateRecord LocalizationSession::EstimateOf(double time_s, const Eig
   record.covariance = p.topLeftCorner<3, 3>();
   record.wheel_calibration = WheelCalibrationOf(ekf_, x, p);
   record.sensor_health = SensorHealthOf(ekf_);
+  if (mount_monitor_) AddMountFindings(*mount_monitor_, record.sensor_health);
   if (tracks_) {
     record.slip = TrackSlip();
     return record;
@@ -151,6 +171,7 @@ SessionStep LocalizationSession::Process(const formats::SensorMessage& message) 
     last_fix_time_s_ = ekf_.time_s();
   }
   step.echo = std::move(result.echo);
+  CheckRangerMounts(message, step);
   if (ekf_.initialised() && ekf_.time_s() >= next_estimate_s_) {
     step.estimate = CurrentEstimate();
     if (marks_) {
@@ -161,6 +182,39 @@ SessionStep LocalizationSession::Process(const formats::SensorMessage& message) 
     next_estimate_s_ = ekf_.time_s() + options_.estimate_period_s;
   }
   return step;
+}
+
+void LocalizationSession::AttachRowMap(const geometry::RowMap& map) {
+  ekf_.AttachRowMap(map);
+  if (!options_.check_ranger_mounts) return;
+  mount_monitor_.emplace(map, header_.origin, vehicle_.ultrasonic, ekf_.config().map_aided);
+}
+
+void LocalizationSession::CheckRangerMounts(const formats::SensorMessage& message, SessionStep& step) {
+  if (!mount_monitor_) return;
+  // Until the heading is known well enough for the echoes' association (map_aided_ranging.hpp,
+  // check 1), a fit would split one ranger's offset with its opposite neighbour's.
+  const MapAidedConfig& map_aided = ekf_.config().map_aided;
+  if (!ekf_.initialised() || map_aided.k_sigma * std::sqrt(ekf_.covariance()(2, 2)) > map_aided.cone_half_angle_rad) {
+    mount_monitor_->Restart();
+    return;
+  }
+  mount_monitor_->ObservePose(ekf_.time_s(), ekf_.state().head<3>(), ekf_.state().segment<3>(StateLayout::kVx));
+  const auto* ping = std::get_if<formats::UltrasonicMessage>(&message);
+  if (ping && ping->range_m) {
+    const auto& rangers = vehicle_.ultrasonic;
+    const auto it = std::find_if(rangers.begin(), rangers.end(),
+                                 [&](const mapio::SensorMount& m) { return m.name == ping->sensor; });
+    if (it != rangers.end()) mount_monitor_->ObserveEcho(ping->time_s, static_cast<std::size_t>(it - rangers.begin()), *ping->range_m);
+  }
+  if (!mount_monitor_->Check(ekf_.time_s())) return;
+  std::string notice;
+  for (const RangerMountFinding& f : mount_monitor_->suspects()) {
+    notice += (notice.empty() ? "" : "; ") + f.ranger + " suspect: " +
+              RangerMountMonitor::Reason(f, mount_monitor_->config().window_s);
+  }
+  if (notice.empty()) notice = "ranger mounts: every ranger agrees with the map again";
+  step.notice = step.notice ? *step.notice + "; " + notice : notice;
 }
 
 std::vector<formats::EstimateRecord> LocalizationSession::FinishSmoothing() {

@@ -62,23 +62,29 @@ struct EchoCost {
   LinearizedEcho echo;
 };
 
-/// The reference's displacement rotated by the heading correction; the heading correction a walk.
+/// The knots' motion turned by the heading correction (ranger_mount_fit.hpp, "motion").
 struct MotionCost {
-  MotionCost(Eigen::Vector2d displacement, double sigma_position_m, double sigma_heading_rad)
-      : d(std::move(displacement)), sp(sigma_position_m), sh(sigma_heading_rad) {}
+  /// reference: the reference's displacement (world) and heading change; predicted: the motion's.
+  MotionCost(Eigen::Vector2d reference_displacement_m, Eigen::Vector2d predicted_displacement_m,
+             double heading_change_excess_rad, double sigma_position_m, double sigma_heading_rad)
+      : dp_ref(std::move(reference_displacement_m)),
+        d(std::move(predicted_displacement_m)),
+        da(heading_change_excess_rad),
+        sp(sigma_position_m),
+        sh(sigma_heading_rad) {}
   template <typename T>
   bool operator()(const T* a, const T* b, T* residual) const {
     using std::cos;
     using std::sin;
-    const T c = cos(a[2]) - 1.0;
+    const T c = cos(a[2]);
     const T s = sin(a[2]);
-    residual[0] = (b[0] - a[0] - (c * d.x() - s * d.y())) / sp;
-    residual[1] = (b[1] - a[1] - (s * d.x() + c * d.y())) / sp;
-    residual[2] = (b[2] - a[2]) / sh;
+    residual[0] = (dp_ref.x() + b[0] - a[0] - (c * d.x() - s * d.y())) / sp;
+    residual[1] = (dp_ref.y() + b[1] - a[1] - (s * d.x() + c * d.y())) / sp;
+    residual[2] = (b[2] - a[2] + da) / sh;
     return true;
   }
-  Eigen::Vector2d d;
-  double sp, sh;
+  Eigen::Vector2d dp_ref, d;
+  double da, sp, sh;
 };
 
 struct ScaledCost {  // x / sigma, componentwise (anchors and the mount prior)
@@ -249,7 +255,16 @@ class Calibrator {
       const double dt = knots[k + 1].time_s - knots[k].time_s;
       if (!(dt > 0.0) || dt > config_.max_knot_gap_s) continue;
       const double root_dt = std::sqrt(dt);
-      auto* cost = new MotionCost(knots[k + 1].pose.head<2>() - knots[k].pose.head<2>(),
+      const Eigen::Vector2d reference = knots[k + 1].pose.head<2>() - knots[k].pose.head<2>();
+      const double turn = WrapAngle(knots[k + 1].pose[2] - knots[k].pose[2]);
+      Eigen::Vector2d predicted = reference;
+      double predicted_turn = turn;
+      if (knots[k].body_rates && knots[k + 1].body_rates) {
+        const Eigen::Vector3d rates = 0.5 * (*knots[k].body_rates + *knots[k + 1].body_rates);
+        predicted_turn = rates[2] * dt;
+        predicted = Rotation(knots[k].pose[2] + 0.5 * predicted_turn) * rates.head<2>() * dt;
+      }
+      auto* cost = new MotionCost(reference, predicted, turn - predicted_turn,
                                   config_.position_walk_mps_per_sqrt_s * root_dt,
                                   config_.heading_walk_rad_per_sqrt_s * root_dt);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<MotionCost, 3, 3, 3>(cost), nullptr,

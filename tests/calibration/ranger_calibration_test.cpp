@@ -3,10 +3,9 @@
 // offsets, leave the right mounts alone, refuse a map of another field, and say why on bad input.
 #include "rowloc/calibration/drive_record.hpp"
 #include "rowloc/calibration/ranger_calibration.hpp"
+#include "one_lane_drive.hpp"
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/scenario.hpp"
-#include "rowloc/sim/simulation.hpp"
-#include "test_support.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -21,37 +20,9 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct Drive {
-  sim::Scenario scenario;
-  geometry::RowMap map;
-  std::string sensors;  ///< the sensor log
-};
-
-/// vineyard-002-4us cut to its first lane (about 130 s): the simulation's mounts are the vehicle file's.
-const Drive& OneLaneDrive() {
-  static const Drive drive = [] {
-    const auto path = test::SourceDir() / "config/scenarios/vineyard-002-4us.json";
-    std::ifstream in(path);
-    nlohmann::json document = nlohmann::json::parse(in);
-    document["route"]["lane_count"] = 1;
-    Drive d{sim::ParseScenario(document.dump(), "one-lane", path.parent_path()), {}, {}};
-    const sim::RowWorld world(*d.scenario.world);
-    d.map = world.TrueRowMap(d.scenario.row_map_height_m, world.StepForTolerance(1e-3));
-    std::stringstream sensors, truth;
-    sim::RunSimulation(d.scenario, {&sensors, &truth, nullptr, nullptr});
-    d.sensors = sensors.str();
-    return d;
-  }();
-  return drive;
-}
-
-/// The vehicle file as a user with a mis-measured ranger would write it: `name` moved by (dx, dy).
-mapio::VehicleConfig WithMountMoved(mapio::VehicleConfig vehicle, const std::string& name, double dx_m, double dy_m) {
-  for (mapio::SensorMount& m : vehicle.ultrasonic) {
-    if (m.name == name) m.position_m += Eigen::Vector3d(dx_m, dy_m, 0.0);
-  }
-  return vehicle;
-}
+using Drive = test::OneLaneDrive;
+const Drive& OneLaneDrive() { return test::SimulatedOneLaneDrive(); }
+using test::WithRangerMoved;
 
 DriveRecord Record(const std::string& sensors, const mapio::VehicleConfig& vehicle, double knot_interval_s = 0.2) {
   std::istringstream log(sensors);
@@ -73,7 +44,7 @@ const RangerMountEstimate& Ranger(const RangerMountFit& c, const std::string& na
 TEST(RangerCalibration, FindsA5cmMountErrorWithin5mmAndLeavesTheOtherMounts) {
   const mapio::VehicleConfig truth = OneLaneDrive().scenario.vehicle;
   // Configured 5 cm further out than it is: the sensor is 5 cm back along its (+y) beam.
-  const RangerMountFit c = Calibrate(WithMountMoved(truth, "us_front_left", 0.0, 0.05));
+  const RangerMountFit c = Calibrate(WithRangerMoved(truth, "us_front_left", 0.0, 0.05));
   ASSERT_EQ(c.rangers.size(), 4u);
   for (const RangerMountEstimate& r : c.rangers) {
     SCOPED_TRACE(r.name);
@@ -108,7 +79,7 @@ TEST(RangerCalibration, RightMountsStayWithin3mm) {
 
 TEST(RangerCalibration, FindsAnInwardErrorOnTheRightSide) {
   // us_rear_right (beam -y) configured at y = -0.45: 5 cm inward; its sensor is 5 cm further along the beam.
-  const RangerMountFit c = Calibrate(WithMountMoved(OneLaneDrive().scenario.vehicle, "us_rear_right", 0.0, 0.05));
+  const RangerMountFit c = Calibrate(WithRangerMoved(OneLaneDrive().scenario.vehicle, "us_rear_right", 0.0, 0.05));
   EXPECT_NEAR(Ranger(c, "us_rear_right").along_beam_m, 0.05, 0.005);
   EXPECT_NEAR(Ranger(c, "us_rear_right").lever_arm_m.y(), -0.5, 0.005);
   EXPECT_NEAR(Ranger(c, "us_front_left").along_beam_m, 0.0, 0.005);

@@ -18,6 +18,7 @@
 #include "rowloc/formats/estimate_stream_writer.hpp"
 #include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/localization/filter_config.hpp"
+#include "rowloc/localization/ranger_mount_monitor.hpp"
 #include "rowloc/localization/track_slip_observer.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
@@ -41,6 +42,9 @@ struct SessionOptions {
   double estimate_period_s = 0.1;  ///< log time between estimate records, > 0
   bool record_updates = true;      ///< return an update record per measurement update (finite NIS)
   std::vector<std::string> skip_types;  ///< message types not given to the filter (ablation runs)
+  /// With a row map: check the rangers' mounts against it while driving (ranger_mount_monitor.hpp);
+  /// a ranger found off is reported in the estimates' sensor_health and as a notice.
+  bool check_ranger_mounts = true;
 };
 
 /// What one message did.
@@ -68,8 +72,11 @@ class LocalizationSession {
   LocalizationSession(mapio::VehicleConfig vehicle, FilterConfig config, const formats::LogHeader& header,
                       SessionOptions options = {});
 
-  /// Uses ultrasonic echoes against the map (VehicleEkf::AttachRowMap; throws std::invalid_argument).
-  void AttachRowMap(const geometry::RowMap& map) { ekf_.AttachRowMap(map); }
+  /// Uses ultrasonic echoes against the map (VehicleEkf::AttachRowMap; throws std::invalid_argument),
+  /// and checks the rangers' mounts against it (SessionOptions::check_ranger_mounts).
+  void AttachRowMap(const geometry::RowMap& map);
+  /// The rangers' mount check, once a row map is attached (and the check is on).
+  const RangerMountMonitor* ranger_mount_monitor() const { return mount_monitor_ ? &*mount_monitor_ : nullptr; }
   /// The R_w and kappa priors of a previous drive (VehicleEkf::SetWheelCalibrationPrior).
   void SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrior>& wheels) {
     ekf_.SetWheelCalibrationPrior(wheels);
@@ -109,12 +116,15 @@ class LocalizationSession {
   /// Feeds the track-slip observer after a wheels message; false with `error` when it refused.
   bool ObserveTracks(const formats::SensorMessage& message, std::string& error);
   void CountUpdates(const ProcessResult& result, SessionStep& step);
+  /// Feeds the mount check with the filter's pose and the message's echo; its changes as a notice.
+  void CheckRangerMounts(const formats::SensorMessage& message, SessionStep& step);
 
   mapio::VehicleConfig vehicle_;
   formats::LogHeader header_;
   SessionOptions options_;
   VehicleEkf ekf_;
   std::optional<TrackSlipObserver> tracks_;
+  std::optional<RangerMountMonitor> mount_monitor_;
   std::size_t right_track_ = 0;
   std::map<std::string, SensorUpdateCounts> counts_;
   std::size_t messages_ = 0, refused_ = 0, skipped_ = 0, estimates_ = 0, ultrasonic_ = 0;

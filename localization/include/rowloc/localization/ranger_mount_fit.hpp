@@ -17,10 +17,14 @@
 //    estimate: r ~ r0 + H (dx - dx0) + H_p R(phi) B_i (c_i - c_i0), H = dr/d(X, Y, phi), H_p its
 //    position part (moving the sensor by R(phi) dl moves it like the pose does). The problem is
 //    re-linearized and the echoes re-associated outer_iterations times.
-//  - motion between knots k and k+1 (dt apart): the reference's displacement rotated by the heading
-//    correction, and the heading correction a random walk:
-//      (dp_{k+1} - dp_k - (R(dphi_k) - I) (p_ref,k+1 - p_ref,k)) / (q_p sqrt(dt)),
-//      (dphi_{k+1} - dphi_k) / (q_phi sqrt(dt)).
+//  - motion between knots k and k+1 (dt apart): the displacement d and heading change a the knots
+//    predict, rotated by the heading correction:
+//      (p_ref,k+1 + dp_{k+1} - p_ref,k - dp_k - R(dphi_k) d) / (q_p sqrt(dt)),
+//      (phi_ref,k+1 + dphi_{k+1} - phi_ref,k - dphi_k - a) / (q_phi sqrt(dt)),
+//    d = p_ref,k+1 - p_ref,k and a = phi_ref,k+1 - phi_ref,k for a smoothed reference (the
+//    residuals then say: the reference's own motion, turned by the heading error), or dead-reckoned
+//    from the filter's velocity states when the knots carry them (ReferenceKnot::body_rates):
+//    d = R(phi_ref,k + a / 2) v dt, a = r dt, v and r the two knots' mean.
 //    This ties the heading to the across-row motion (a heading error makes the vehicle drift across
 //    the row as it drives), which makes a ranger's offset observable apart from the heading.
 //  - anchor: dx_k / (sigma_position, sigma_position, sigma_heading): weak; keeps the corrections
@@ -43,6 +47,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -116,6 +121,11 @@ struct RangerMountFit {
 struct ReferenceKnot {
   double time_s = 0.0;
   Eigen::Vector3d pose = Eigen::Vector3d::Zero();  ///< (X, Y, phi) in the ranging's local frame, (m, m, rad)
+  /// The filter's body velocity and yaw rate (v_x, v_y, r), (m/s, m/s, rad/s), if known: the motion
+  /// between two knots that both have them is dead-reckoned from them (a filtered trajectory, whose
+  /// position updates do not follow its heading); otherwise it is the reference's own displacement
+  /// (a smoothed trajectory, consistent with its headings).
+  std::optional<Eigen::Vector3d> body_rates;
 };
 
 /// One echo (a ping with a range).
