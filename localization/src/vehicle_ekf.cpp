@@ -75,18 +75,13 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
       gate_imu_(ChiSquareGate(3, config_.imu.gate_probability)),
-      gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)) {
+      gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)),
+      map_aided_(vehicle_, config_.map_aided, frame_.origin()) {
   // Quantiles are costly (Boost.Math root finding): computed once per dimension, not per message.
   for (int m = 1; m <= static_cast<int>(vehicle_.wheels.size()); ++m) {
     wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
     steering_gates_.push_back(ChiSquareGate(m, config_.steering.gate_probability));
   }
-  for (const mapio::SensorMount& sensor : vehicle_.ultrasonic) {
-    ultrasonic_mounts_.push_back(
-        RangeSensorMount{sensor.position_m.head<2>(), sensor.yaw_rad, config_.map_aided.cone_half_angle_rad});
-  }
-  gate_map_aided_1_ = ChiSquareGate(1, config_.map_aided.gate_probability);
-  gate_map_aided_2_ = ChiSquareGate(2, config_.map_aided.gate_probability);
   Reset();
 }
 

@@ -144,7 +144,9 @@ void VehicleEkf::Validate(const formats::SensorMessage& message) const {
       RequirePositive(message, *ping->range_m, "range_m");
       RequireWithin(message, *ping->range_m, kMaxRangeM, "range_m");
     }
-    if (ranging_ && !UltrasonicIndex(ping->sensor, ping->sensor_index)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    if (map_aided_.has_row_map() && !map_aided_.RangerIndex(ping->sensor, ping->sensor_index)) {
+      Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    }
   }
 }
 

@@ -15,7 +15,8 @@
 // used once a row map is attached (AttachRowMap; map_aided_ranging.hpp, issue 5): each echo is one
 // update named "ultrasonic" by the method of config.map_aided, against the segment it comes from,
 // once its association is certain (map_aided_ranging.hpp, checks 1-3: heading, sensor inside a
-// canopy, lane; otherwise the echo is skipped and counted in MapAidedStats).
+// canopy, lane; otherwise the echo is skipped and counted in MapAidedStats). MapAidedUpdater
+// (map_aided_updater.hpp) makes the measurement from the pose block; the filter applies it.
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
 // max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4, a non-positive range, an
@@ -41,9 +42,8 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/fixed_interval_smoother.hpp"
 #include "rowloc/localization/kalman_update.hpp"
-#include "rowloc/localization/map_aided_ranging.hpp"
+#include "rowloc/localization/map_aided_updater.hpp"
 #include "rowloc/localization/measurement_models.hpp"
-#include "rowloc/localization/map_agreement.hpp"
 #include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
@@ -71,35 +71,6 @@ struct UpdateRecord {
   UpdateOutcome outcome;
 };
 
-/// What happened to the ultrasonic echoes offered to the map-aided update (the accepted and gated
-/// ones are in the update records); counts since construction.
-struct MapAidedStats {
-  std::size_t echoes = 0;         ///< echoes with a range while a map is attached and the filter runs
-  std::size_t no_segment = 0;     ///< no row segment inside the predicted cone within max_range_m
-  std::size_t ambiguous = 0;      ///< more than one candidate segment (a corner, or a prediction error)
-  std::size_t contradicting = 0;  ///< cut methods: the slab misses the k-sigma ellipse (reported, not clipped)
-  std::size_t uninformative = 0;  ///< cut methods: the slab holds the whole ellipse (nothing to update)
-  std::size_t degenerate = 0;     ///< no usable geometry (grazing beam, sensor on a vertex, degenerate slab)
-  // Echoes not used because their association is not certain (map_aided_ranging.hpp, checks 1-3):
-  std::size_t heading_uncertain = 0;  ///< k sigma_phi above the cone's half aperture
-  std::size_t inside_outline = 0;     ///< the predicted sensor inside a canopy outline
-  std::size_t lane_ambiguous = 0;     ///< k sigma of the predicted range above half the lane clearance
-};
-/// What one echo did to the position (the ellipse before and after it), for plots and debugging:
-/// filled for every echo with a range that reaches the map-aided update (MapAidedStats::echoes).
-struct EchoTrace {
-  std::string sensor;
-  double measured_range_m = 0.0;
-  /// "accepted", "gated", "no_segment", "contradicting", "uninformative", "degenerate",
-  /// "heading_uncertain", "inside_outline" or "lane_ambiguous".
-  std::string outcome;
-  Eigen::Vector2d prior_position_m = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d prior_covariance = Eigen::Matrix2d::Zero();      ///< of the position, m^2
-  Eigen::Vector2d posterior_position_m = Eigen::Vector2d::Zero();  ///< = prior unless accepted
-  Eigen::Matrix2d posterior_covariance = Eigen::Matrix2d::Zero();
-  std::optional<geometry::Segment2> segment;  ///< the row segment of the chosen candidate
-  std::optional<EdgeLine> line;               ///< its local straight row (normal towards the sensor)
-};
 /// One wheel's slip-aware calibration from a previous drive (e.g. the last `wheel_calibration` of
 /// an estimate stream, docs/protocol.md §3): the prior of R_w and kappa at initialisation instead
 /// of the filter file's (nominal radius, slip_compliance_initial).
@@ -145,10 +116,10 @@ class VehicleEkf {
   /// Throws std::invalid_argument for an invalid map (e.g. no rows), or when the vehicle has no
   /// ultrasonic sensor.
   void AttachRowMap(const geometry::RowMap& map);
-  bool has_row_map() const { return ranging_ != nullptr; }
-  const MapAidedStats& map_aided_stats() const { return map_aided_stats_; }
+  bool has_row_map() const { return map_aided_.has_row_map(); }
+  const MapAidedStats& map_aided_stats() const { return map_aided_.stats(); }
   /// The filter's cache of R-tree box queries of the row map (hits and misses since construction).
-  const geometry::SegmentQueryCache& row_search_cache() const { return candidate_buffers_.query_cache; }
+  const geometry::SegmentQueryCache& row_search_cache() const { return map_aided_.row_search_cache(); }
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
   /// The R_w and kappa priors of every wheel, from a previous drive, used at every (re-)initialisation
@@ -237,11 +208,6 @@ class VehicleEkf {
   ProcessResult Apply(const formats::SteeringMessage& steering);
   ProcessResult Apply(const formats::VioMessage& vio);
   ProcessResult Apply(const formats::UltrasonicMessage& ping);
-  /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it; `hint`
-  /// (the message's index in the log header, usually the vehicle's order) is tried first.
-  std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
-  /// Every kAgreementEveryEchoes echoes: the map agreement's finding into the sensor health ("map").
-  void CheckMapAgreement();
   std::optional<std::string> TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   /// A fix waiting for the initialisation, with the distance the wheels rolled until it.
   struct PendingFix {
@@ -302,9 +268,9 @@ class VehicleEkf {
   /// The last wheels message's torques, vehicle order; none when it carried none.
   std::optional<std::vector<double>> last_torque_nm_;
   std::vector<std::optional<double>> last_steering_rad_;
-  std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
-  /// Reused by every echo: scratch, and the cache of R-tree results, which changes no result.
-  RowMapRanging::Buffers candidate_buffers_;
+  /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
+  /// applies what it returns to the full state.
+  MapAidedUpdater map_aided_;
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
@@ -322,10 +288,6 @@ class VehicleEkf {
     Eigen::VectorXd step;
   };
   UpdateBuffers update_buffers_;
-  std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
-  double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
-  MapAidedStats map_aided_stats_;
-  MapAgreementMonitor map_agreement_;  ///< does the map agree with the echoes? Reported as the health of "map"
   std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
   std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
