@@ -46,7 +46,9 @@
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/state_layout.hpp"
+#include "rowloc/localization/traction_updater.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
+#include "rowloc/localization/wheel_angle_updater.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
@@ -202,9 +204,9 @@ class VehicleEkf {
   /// State `index` set to `value` with `variance`, uncorrelated with the others (wheel angles and
   /// traction states anchored to their measurement).
   void Reanchor(int index, double value, double variance);
-  /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
-  /// variance, uncorrelated with the other states.
-  void AnchorWheelAngles(const Eigen::VectorXd& z);
+  /// Sets every wheel-angle state to the last planned angles (wheel_angles_.measured(), vehicle
+  /// order) with the quantization variance, uncorrelated with the other states.
+  void AnchorWheelAngles();
   ProcessResult Apply(const formats::SteeringMessage& steering);
   ProcessResult Apply(const formats::VioMessage& vio);
   ProcessResult Apply(const formats::UltrasonicMessage& ping);
@@ -262,11 +264,11 @@ class VehicleEkf {
   std::size_t time_jump_run_ = 0;            ///< consecutive messages refused for a time jump
   std::size_t time_jumps_refused_ = 0;
   std::size_t prediction_steps_ = 0;
-  bool wheel_angles_anchored_ = false;         ///< the wheel-angle states hold the encoders' angles
-  Eigen::VectorXd last_wheel_angles_;          ///< the last wheels message's angles, vehicle order
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
-  /// The last wheels message's torques, vehicle order; none when it carried none.
-  std::optional<std::vector<double>> last_torque_nm_;
+  /// The last wheels message's torques (last_torque_nm()) and the torque update of the traction states.
+  TractionUpdater traction_;
+  /// When and how the encoders' angles update the wheel-angle states (anchoring).
+  WheelAngleUpdater wheel_angles_;
   std::vector<std::optional<double>> last_steering_rad_;
   /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
   /// applies what it returns to the full state.
@@ -275,9 +277,8 @@ class VehicleEkf {
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
-    LinearizedMeasurement gnss, imu, wheels, steering, vio, torque;
+    LinearizedMeasurement gnss, imu, wheels, steering, vio;
     WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
-    Eigen::VectorXd measured;           ///< wheel angles or traction coefficients, vehicle order
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
