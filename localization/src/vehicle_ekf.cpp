@@ -75,18 +75,15 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       wheel_index_(WheelIndex(vehicle_, wheel_order)),
       gate_gps_(ChiSquareGate(2, config_.gps.gate_probability)),
       gate_imu_(ChiSquareGate(3, config_.imu.gate_probability)),
-      gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)) {
+      gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)),
+      traction_(vehicle_, config_, layout_),
+      wheel_angles_(config_.wheels, layout_),
+      map_aided_(vehicle_, config_.map_aided, frame_.origin()) {
   // Quantiles are costly (Boost.Math root finding): computed once per dimension, not per message.
   for (int m = 1; m <= static_cast<int>(vehicle_.wheels.size()); ++m) {
     wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
     steering_gates_.push_back(ChiSquareGate(m, config_.steering.gate_probability));
   }
-  for (const mapio::SensorMount& sensor : vehicle_.ultrasonic) {
-    ultrasonic_mounts_.push_back(
-        RangeSensorMount{sensor.position_m.head<2>(), sensor.yaw_rad, config_.map_aided.cone_half_angle_rad});
-  }
-  gate_map_aided_1_ = ChiSquareGate(1, config_.map_aided.gate_probability);
-  gate_map_aided_2_ = ChiSquareGate(2, config_.map_aided.gate_probability);
   Reset();
 }
 
@@ -96,7 +93,7 @@ void VehicleEkf::Reset() {
   pending_fixes_.clear();
   travelled_m_ = 0.0;
   odometry_time_s_.reset();
-  wheel_angles_anchored_ = false;
+  wheel_angles_.Unanchor();
   x_ = Eigen::VectorXd::Zero(layout_.size);
   p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
 }
@@ -143,7 +140,7 @@ void VehicleEkf::PredictTo(double t) {
     if (smoother_) BeginTransition();
     if (layout_.has_wheel_angles()) {  // before the base step: F = F_base (I + dt E J), wheel_angle_model.hpp
       ProjectStates(true);              // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
-      PropagateWheelAngles(vehicle_, layout_, config_, last_torque_nm_, x_, p_, dt, update_buffers_.wheel_rates);
+      PropagateWheelAngles(vehicle_, layout_, config_, traction_.last_torque_nm(), x_, p_, dt, update_buffers_.wheel_rates);
       if (smoother_) smoother_->TransitionAddRows(layout_.wheel_angle, dt * update_buffers_.wheel_rates.rates.jacobian);
     }
     if (smoother_) {
@@ -233,15 +230,8 @@ ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
   const std::size_t n = vehicle_.wheels.size();
   if (!initialised_) AccumulateOdometry(wheels.time_s);  // with the previous message's speeds
   last_speed_radps_.assign(n, 0.0);
-  if (wheels.torque_nm) {
-    if (!last_torque_nm_) last_torque_nm_.emplace(n, 0.0);
-  } else {
-    last_torque_nm_.reset();
-  }
-  for (std::size_t j = 0; j < n; ++j) {
-    last_speed_radps_[wheel_index_[j]] = wheels.speed_radps[j];
-    if (wheels.torque_nm) (*last_torque_nm_)[wheel_index_[j]] = (*wheels.torque_nm)[j];
-  }
+  for (std::size_t j = 0; j < n; ++j) last_speed_radps_[wheel_index_[j]] = wheels.speed_radps[j];
+  traction_.ObserveTorques(wheels, wheel_index_);
   ProcessResult result;
   if (!initialised_) return result;
   UpdateBuffers& b = update_buffers_;
@@ -250,7 +240,7 @@ ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
   if (layout_.has_traction() && wheels.torque_nm) ApplyTorques(wheels.time_s, result);
   if (!(layout_.has_wheel_angles() && wheels.angle_rad && ApplyWheelAngles(wheels, result))) {
     ProjectStates(true);  // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
-    WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
+    WheelSpeedModel(x_, vehicle_, layout_, traction_.last_torque_nm(), config_.wheels.encoder_low_pass_time_constant_s,
                     config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
     const Eigen::Map<const Eigen::VectorXd> z(last_speed_radps_.data(), m);
     const double s = config_.wheels.speed_sigma_radps, f = config_.wheels.speed_sigma_fraction;
@@ -287,7 +277,7 @@ void VehicleEkf::IterateWheelSpeedUpdate(const VectorRef& measured_radps) {
   UpdateBuffers& b = update_buffers_;
   for (int i = 1; i < config_.wheels.speed_update_iterations; ++i) {
     ProjectStates(true);  // the linearization point inside the model's domain
-    WheelSpeedModel(x_, vehicle_, layout_, last_torque_nm_, config_.wheels.encoder_low_pass_time_constant_s,
+    WheelSpeedModel(x_, vehicle_, layout_, traction_.last_torque_nm(), config_.wheels.encoder_low_pass_time_constant_s,
                     config_.slip_aware_odometry.traction_from_acceleration, b.wheels);
     b.step = b.prior_state - x_;
     b.step(L::kPhi) = WrapAngle(b.step(L::kPhi));
@@ -299,27 +289,14 @@ void VehicleEkf::IterateWheelSpeedUpdate(const VectorRef& measured_radps) {
 }
 
 void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {
-  const std::size_t n = vehicle_.wheels.size();
-  UpdateBuffers& b = update_buffers_;
-  Eigen::VectorXd& z = b.measured;  // mu = T / (N r) per wheel
-  z.resize(static_cast<Eigen::Index>(n));
-  b.noise.setZero(z.size(), z.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto row = static_cast<Eigen::Index>(i);
-    const double scale = WheelTractionScaleNm(vehicle_, i);
-    const double sigma = config_.slip_aware_odometry.torque_sigma_nm / scale;
-    z(row) = (*last_torque_nm_)[i] / scale;
-    b.noise(row, row) = sigma * sigma;
-  }
-  SelectedStatesModel(x_, layout_.traction, b.torque);
-  b.innovation = z - b.torque.predicted;
-  result.updates.push_back(Update(time_s, "torque", b.innovation, b.torque.jacobian, b.noise, wheel_gates_[n - 1]));
+  const TractionMeasurement& m = traction_.Measure(x_);  // mu = T / (N r) per wheel
+  result.updates.push_back(Update(time_s, "torque", m.innovation, m.model.jacobian, m.noise, m.gate));
   if (result.updates.back().outcome.accepted) return;
   // A torque step (the drive changed its command): the traction states jump to the measurement,
   // uncorrelated with the rest; the smoothing starts again from there.
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < layout_.traction.size(); ++i) {
     const auto row = static_cast<Eigen::Index>(i);
-    Reanchor(layout_.traction[i], z(row), b.noise(row, row));
+    Reanchor(layout_.traction[i], m.measured(row), m.noise(row, row));
   }
 }
 
@@ -332,50 +309,26 @@ void VehicleEkf::Reanchor(int index, double value, double variance) {
 }
 
 bool VehicleEkf::ApplyWheelAngles(const formats::WheelsMessage& wheels, ProcessResult& result) {
-  const std::size_t n = vehicle_.wheels.size();
-  UpdateBuffers& b = update_buffers_;
-  Eigen::VectorXd& z = b.measured;
-  z.resize(static_cast<Eigen::Index>(n));
-  for (std::size_t j = 0; j < n; ++j) z(static_cast<Eigen::Index>(wheel_index_[j])) = (*wheels.angle_rad)[j];
-  // No wheel ticked since the last message: at rest the quantization error is frozen, a bias the
-  // angle update would keep integrating (into the pose, through the angles' correlations): the
-  // speeds are used instead.
-  if (wheel_angles_anchored_ && z == last_wheel_angles_) return false;
-  last_wheel_angles_ = z;
-  // Until the wheel rates are known to about a tick per sample, the speeds (their wider noise)
-  // carry the wheels: a precise angle linearized far from the truth can drive the filter away
-  // (docs/notes/2026-12-02-localization-filter.md §5.7). The angles are re-anchored so that they start from here.
-  if (wheel_angles_anchored_) {
-    const double max_sigma = config_.wheels.angle_max_prediction_sigma_rad;
-    const double max_variance = max_sigma * max_sigma;
-    for (const int k : layout_.wheel_angle) {
-      if (p_(k, k) > max_variance) {
-        AnchorWheelAngles(z);
-        return false;
-      }
-    }
-    WheelAngleModel(x_, layout_, b.wheels);
-    const double s = config_.wheels.angle_sigma_rad;
-    b.noise.setZero(z.size(), z.size());
-    b.noise.diagonal().setConstant(s * s);
-    b.innovation = z - b.wheels.predicted;
-    result.updates.push_back(
-        Update(wheels.time_s, "wheel_angles", b.innovation, b.wheels.jacobian, b.noise, wheel_gates_[n - 1]));
-    if (result.updates.back().outcome.accepted) return true;
-    result.notice = "wheel angles gated out at t=" + std::to_string(wheels.time_s) + " s: re-anchored to the encoders";
+  switch (wheel_angles_.Plan(wheels, wheel_index_, p_)) {  // wheel_angle_updater.hpp says when
+    case WheelAngleStep::kUseSpeeds: return false;
+    case WheelAngleStep::kAnchorAndUseSpeeds: AnchorWheelAngles(); return false;
+    case WheelAngleStep::kAnchor: AnchorWheelAngles(); return true;
+    case WheelAngleStep::kUpdate: break;
   }
-  // Anchor (first angles since initialisation, or after a gated-out update). Only the angle's
-  // offset is lost.
-  AnchorWheelAngles(z);
+  const WheelAngleMeasurement& m = wheel_angles_.Measure(x_);
+  result.updates.push_back(Update(wheels.time_s, "wheel_angles", m.innovation, m.model.jacobian, m.noise, m.gate));
+  if (result.updates.back().outcome.accepted) return true;
+  result.notice = "wheel angles gated out at t=" + std::to_string(wheels.time_s) + " s: re-anchored to the encoders";
+  AnchorWheelAngles();  // only the angle's offset is lost
   return true;
 }
 
-void VehicleEkf::AnchorWheelAngles(const Eigen::VectorXd& z) {
-  const double variance = config_.wheels.angle_sigma_rad * config_.wheels.angle_sigma_rad;
+void VehicleEkf::AnchorWheelAngles() {
+  const Eigen::VectorXd& z = wheel_angles_.measured();
   for (std::size_t i = 0; i < layout_.wheel_angle.size(); ++i) {
-    Reanchor(layout_.wheel_angle[i], z(static_cast<Eigen::Index>(i)), variance);
+    Reanchor(layout_.wheel_angle[i], z(static_cast<Eigen::Index>(i)), wheel_angles_.anchor_variance());
   }
-  wheel_angles_anchored_ = true;
+  wheel_angles_.MarkAnchored();
 }
 
 ProcessResult VehicleEkf::Apply(const formats::SteeringMessage& steering) {
@@ -452,7 +405,7 @@ void VehicleEkf::ProjectStates(bool before_wheel_model) {
     if (x_(radius) < kMinRadiusFactor * nominal) project(radius, kMinRadiusFactor * nominal);
     if (x_(radius) > kMaxRadiusFactor * nominal) project(radius, kMaxRadiusFactor * nominal);
     if (x_(kappa) < 0.0) project(kappa, 0.0);
-    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, last_torque_nm_, from_acceleration);
+    const double mu = WheelTractionCoefficient(x_, vehicle_, layout_, i, traction_.last_torque_nm(), from_acceleration);
     max_kappa[i] = mu > 0.0 ? slip.max_model_slip / mu : std::numeric_limits<double>::infinity();
     if (x_(kappa) > max_kappa[i]) project(kappa, max_kappa[i]);
   }

@@ -144,7 +144,9 @@ void VehicleEkf::Validate(const formats::SensorMessage& message) const {
       RequirePositive(message, *ping->range_m, "range_m");
       RequireWithin(message, *ping->range_m, kMaxRangeM, "range_m");
     }
-    if (ranging_ && !UltrasonicIndex(ping->sensor, ping->sensor_index)) Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    if (map_aided_.has_row_map() && !map_aided_.RangerIndex(ping->sensor, ping->sensor_index)) {
+      Reject(message, "'" + ping->sensor + "' is not an ultrasonic sensor of the vehicle");
+    }
   }
 }
 
@@ -179,10 +181,9 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   }
   for (std::size_t i = 0; i < layout_.wheel_count(); ++i) {  // traction: the last torques, if any
     if (const int k = layout_.traction[i]; k >= 0) {
-      const double scale = WheelTractionScaleNm(vehicle_, i);
-      const double sigma = slip.torque_sigma_nm / scale;
-      x_(k) = last_torque_nm_ ? (*last_torque_nm_)[i] / scale : 0.0;
-      variance(k) = last_torque_nm_ ? sigma * sigma : 0.25;  // without torques yet: |mu| ~ 0.5
+      const TractionPrior prior = traction_.Initial(i);
+      x_(k) = prior.value;
+      variance(k) = prior.variance;
     }
   }
   p_.diagonal() = variance;
@@ -221,7 +222,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   gps_gated_since_s_.reset();
   initialised_ = true;
   pending_fixes_.clear();
-  wheel_angles_anchored_ = false;
+  wheel_angles_.Unanchor();
   if (smoother_) smoother_->Start(x_, p_);
 }
 

@@ -12,8 +12,8 @@
 // 2026-12-04-map-agreement.md measures a window-mean model that could not tell them apart); it
 // needs a calibration over a whole drive.
 //
-// The monitor only counts; the filter (vehicle_ekf_map_aided.cpp) feeds it and reports what it
-// finds through the sensor health (sensor_health.hpp: "map suspect: ...").
+// The monitor only counts; the map-aided update (map_aided_updater.cpp) feeds it, and the filter
+// reports what it finds through the sensor health (sensor_health.hpp: "map suspect: ...").
 #pragma once
 
 #include <cstddef>

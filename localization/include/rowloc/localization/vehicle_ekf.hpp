@@ -15,7 +15,8 @@
 // used once a row map is attached (AttachRowMap; map_aided_ranging.hpp, issue 5): each echo is one
 // update named "ultrasonic" by the method of config.map_aided, against the segment it comes from,
 // once its association is certain (map_aided_ranging.hpp, checks 1-3: heading, sensor inside a
-// canopy, lane; otherwise the echo is skipped and counted in MapAidedStats).
+// canopy, lane; otherwise the echo is skipped and counted in MapAidedStats). MapAidedUpdater
+// (map_aided_updater.hpp) makes the measurement from the pose block; the filter applies it.
 //
 // Inputs are checked: non-finite values, out-of-range values (sigma <= 0, |omega| above
 // max_speed_radps, |delta| above the vehicle's limit + 0.1 rad, a sigma above 1e4, a non-positive range, an
@@ -41,12 +42,13 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/fixed_interval_smoother.hpp"
 #include "rowloc/localization/kalman_update.hpp"
-#include "rowloc/localization/map_aided_ranging.hpp"
+#include "rowloc/localization/map_aided_updater.hpp"
 #include "rowloc/localization/measurement_models.hpp"
-#include "rowloc/localization/map_agreement.hpp"
 #include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/state_layout.hpp"
+#include "rowloc/localization/traction_updater.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
+#include "rowloc/localization/wheel_angle_updater.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
@@ -71,35 +73,6 @@ struct UpdateRecord {
   UpdateOutcome outcome;
 };
 
-/// What happened to the ultrasonic echoes offered to the map-aided update (the accepted and gated
-/// ones are in the update records); counts since construction.
-struct MapAidedStats {
-  std::size_t echoes = 0;         ///< echoes with a range while a map is attached and the filter runs
-  std::size_t no_segment = 0;     ///< no row segment inside the predicted cone within max_range_m
-  std::size_t ambiguous = 0;      ///< more than one candidate segment (a corner, or a prediction error)
-  std::size_t contradicting = 0;  ///< cut methods: the slab misses the k-sigma ellipse (reported, not clipped)
-  std::size_t uninformative = 0;  ///< cut methods: the slab holds the whole ellipse (nothing to update)
-  std::size_t degenerate = 0;     ///< no usable geometry (grazing beam, sensor on a vertex, degenerate slab)
-  // Echoes not used because their association is not certain (map_aided_ranging.hpp, checks 1-3):
-  std::size_t heading_uncertain = 0;  ///< k sigma_phi above the cone's half aperture
-  std::size_t inside_outline = 0;     ///< the predicted sensor inside a canopy outline
-  std::size_t lane_ambiguous = 0;     ///< k sigma of the predicted range above half the lane clearance
-};
-/// What one echo did to the position (the ellipse before and after it), for plots and debugging:
-/// filled for every echo with a range that reaches the map-aided update (MapAidedStats::echoes).
-struct EchoTrace {
-  std::string sensor;
-  double measured_range_m = 0.0;
-  /// "accepted", "gated", "no_segment", "contradicting", "uninformative", "degenerate",
-  /// "heading_uncertain", "inside_outline" or "lane_ambiguous".
-  std::string outcome;
-  Eigen::Vector2d prior_position_m = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d prior_covariance = Eigen::Matrix2d::Zero();      ///< of the position, m^2
-  Eigen::Vector2d posterior_position_m = Eigen::Vector2d::Zero();  ///< = prior unless accepted
-  Eigen::Matrix2d posterior_covariance = Eigen::Matrix2d::Zero();
-  std::optional<geometry::Segment2> segment;  ///< the row segment of the chosen candidate
-  std::optional<EdgeLine> line;               ///< its local straight row (normal towards the sensor)
-};
 /// One wheel's slip-aware calibration from a previous drive (e.g. the last `wheel_calibration` of
 /// an estimate stream, docs/protocol.md §3): the prior of R_w and kappa at initialisation instead
 /// of the filter file's (nominal radius, slip_compliance_initial).
@@ -145,10 +118,10 @@ class VehicleEkf {
   /// Throws std::invalid_argument for an invalid map (e.g. no rows), or when the vehicle has no
   /// ultrasonic sensor.
   void AttachRowMap(const geometry::RowMap& map);
-  bool has_row_map() const { return ranging_ != nullptr; }
-  const MapAidedStats& map_aided_stats() const { return map_aided_stats_; }
+  bool has_row_map() const { return map_aided_.has_row_map(); }
+  const MapAidedStats& map_aided_stats() const { return map_aided_.stats(); }
   /// The filter's cache of R-tree box queries of the row map (hits and misses since construction).
-  const geometry::SegmentQueryCache& row_search_cache() const { return candidate_buffers_.query_cache; }
+  const geometry::SegmentQueryCache& row_search_cache() const { return map_aided_.row_search_cache(); }
   /// Back to the uninitialised state (keeps configuration and time).
   void Reset();
   /// The R_w and kappa priors of every wheel, from a previous drive, used at every (re-)initialisation
@@ -231,17 +204,12 @@ class VehicleEkf {
   /// State `index` set to `value` with `variance`, uncorrelated with the others (wheel angles and
   /// traction states anchored to their measurement).
   void Reanchor(int index, double value, double variance);
-  /// Sets every wheel-angle state to the measured angles z (vehicle order) with the quantization
-  /// variance, uncorrelated with the other states.
-  void AnchorWheelAngles(const Eigen::VectorXd& z);
+  /// Sets every wheel-angle state to the last planned angles (wheel_angles_.measured(), vehicle
+  /// order) with the quantization variance, uncorrelated with the other states.
+  void AnchorWheelAngles();
   ProcessResult Apply(const formats::SteeringMessage& steering);
   ProcessResult Apply(const formats::VioMessage& vio);
   ProcessResult Apply(const formats::UltrasonicMessage& ping);
-  /// Index of the ultrasonic sensor `name` in vehicle_.ultrasonic, if the vehicle lists it; `hint`
-  /// (the message's index in the log header, usually the vehicle's order) is tried first.
-  std::optional<std::size_t> UltrasonicIndex(const std::string& name, std::size_t hint) const;
-  /// Every kAgreementEveryEchoes echoes: the map agreement's finding into the sensor health ("map").
-  void CheckMapAgreement();
   std::optional<std::string> TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna_enu);
   /// A fix waiting for the initialisation, with the distance the wheels rolled until it.
   struct PendingFix {
@@ -296,22 +264,21 @@ class VehicleEkf {
   std::size_t time_jump_run_ = 0;            ///< consecutive messages refused for a time jump
   std::size_t time_jumps_refused_ = 0;
   std::size_t prediction_steps_ = 0;
-  bool wheel_angles_anchored_ = false;         ///< the wheel-angle states hold the encoders' angles
-  Eigen::VectorXd last_wheel_angles_;          ///< the last wheels message's angles, vehicle order
   std::vector<double> last_speed_radps_;       ///< vehicle order; empty before the first wheels message
-  /// The last wheels message's torques, vehicle order; none when it carried none.
-  std::optional<std::vector<double>> last_torque_nm_;
+  /// The last wheels message's torques (last_torque_nm()) and the torque update of the traction states.
+  TractionUpdater traction_;
+  /// When and how the encoders' angles update the wheel-angle states (anchoring).
+  WheelAngleUpdater wheel_angles_;
   std::vector<std::optional<double>> last_steering_rad_;
-  std::shared_ptr<const RowMapRanging> ranging_;  ///< null: echoes are not used
-  /// Reused by every echo: scratch, and the cache of R-tree results, which changes no result.
-  RowMapRanging::Buffers candidate_buffers_;
+  /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
+  /// applies what it returns to the full state.
+  MapAidedUpdater map_aided_;
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
   struct UpdateBuffers {
-    LinearizedMeasurement gnss, imu, wheels, steering, vio, torque;
+    LinearizedMeasurement gnss, imu, wheels, steering, vio;
     WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
-    Eigen::VectorXd measured;           ///< wheel angles or traction coefficients, vehicle order
     Eigen::VectorXd innovation;
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
@@ -322,10 +289,6 @@ class VehicleEkf {
     Eigen::VectorXd step;
   };
   UpdateBuffers update_buffers_;
-  std::vector<RangeSensorMount> ultrasonic_mounts_;  ///< vehicle order (vehicle_.ultrasonic)
-  double gate_map_aided_1_ = 0.0, gate_map_aided_2_ = 0.0;  ///< 1- and 2-dimensional map-aided updates
-  MapAidedStats map_aided_stats_;
-  MapAgreementMonitor map_agreement_;  ///< does the map agree with the echoes? Reported as the health of "map"
   std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
   std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
