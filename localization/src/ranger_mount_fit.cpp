@@ -137,7 +137,7 @@ class Calibrator {
       const double gate = pass == 0 ? config_.association_gate_m : config_.refined_gate_m;
       const std::vector<LinearizedEcho> echoes = Associate(gate, result);
       if (pass == 0) rms_before = ResidualRms(echoes);
-      const ceres::Solver::Summary summary = Solve(echoes);
+      const ceres::Solver::Summary summary = Solve(echoes, pass + 1 == config_.outer_iterations);
       result.solver_iterations += static_cast<int>(summary.iterations.size());
       result.solver_report = summary.BriefReport();
     }
@@ -272,7 +272,8 @@ class Calibrator {
     }
   }
 
-  ceres::Solver::Summary Solve(const std::vector<LinearizedEcho>& echoes) {
+  /// with_covariance: also the mount corrections' covariance (the last pass only: it costs a factorisation).
+  ceres::Solver::Summary Solve(const std::vector<LinearizedEcho>& echoes, bool with_covariance) {
     ceres::Problem problem;
     AddMotionAndAnchors(problem);
     for (const LinearizedEcho& e : echoes) {
@@ -307,7 +308,7 @@ class Calibrator {
     if (summary.termination_type == ceres::FAILURE) {
       throw RangerMountFitError("the least-squares solver failed: " + summary.message);
     }
-    last_covariance_ = MountCovariances(problem);
+    if (with_covariance) last_covariance_ = MountCovariances(problem);
     return summary;
   }
 

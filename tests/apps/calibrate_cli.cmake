@@ -43,3 +43,11 @@ rowloc_cli_test(calibrate_refuses_to_overwrite_its_log OFF "--output .* is the s
                 calibrate ${PROJECT_SOURCE_DIR}/tests/data/logs/vineyard-002-1us-echoes.ndjson
                 --vehicle ${_cal_vehicle} --map ${PROJECT_SOURCE_DIR}/maps/sample-vineyard.geojson
                 -o ${PROJECT_SOURCE_DIR}/tests/data/logs/vineyard-002-1us-echoes.ndjson)
+# tools/mount-sweep (a research tool) on the one-lane drive: the calibration's error and the check's
+# report per case; an unknown case is refused.
+rowloc_command_test(tools.mount_sweep_measures_a_case ON
+  "\\| 2 \\| right \\| [0-2]\\.[0-9] \\| 0\\.0 \\| - \\|.*\\| 2 \\| FLout5 \\| [0-4]\\.[0-9] \\| 0\\.0 \\| us_front_left \\([0-9.]+\\) \\|"
+  ${PROJECT_SOURCE_DIR}/tools/mount-sweep ${_cal_data}/one-lane.json --seeds 2 --cases right,FLout5 --check
+  --rowloc $<TARGET_FILE:rowloc> --out ${_cal_out}/mount-sweep)
+rowloc_command_test(tools.mount_sweep_rejects_an_unknown_case OFF "unknown case sideways"
+  ${PROJECT_SOURCE_DIR}/tools/mount-sweep ${_cal_data}/one-lane.json --cases sideways --rowloc $<TARGET_FILE:rowloc>)

@@ -5,11 +5,13 @@
 //
 // Unknowns. Per ranger i a correction c_i = (along, across) its beam (m) of its configured lever arm
 // l_i (body frame x forward, y left): the mount is l_i + dl_i, dl_i = B_i c_i, B_i = [beam, beam
-// rotated +90 degrees] (the across component only with estimate_across_beam); per knot k of the reference trajectory (drive_record.hpp) a pose correction
+// rotated +90 degrees] (the across component only with estimate_across_beam); per knot k of the
+// reference trajectory (a smoothed or filtered track, ReferenceKnot) a pose correction
 // dx_k = (dX, dY, dphi) (m, m, rad), linear in time between knots: the drive's pose at time t is
 // x_ref(t) + dx(t).
 //
-// Residuals (weights are 1-sigma values of the configuration, RangerCalibrationConfig):
+// Residuals (weights are 1-sigma values of the configuration, RangerMountFitConfig; solved by Ceres,
+// sparse normal Cholesky; the Huber loss is Huber 1964's):
 //  - echo j of ranger i at time t (Huber loss at huber_sigmas):
 //      (d_j - r(x_ref(t) + dx(t), l_i + dl_i)) / sigma_j,   sigma_j^2 = range_sigma^2 + sigma_map^2,
 //    with r the range model of the map-aided update (localization/map_aided_ranging.hpp: the nearest
@@ -35,9 +37,9 @@
 // measures by the same amount and is observable; across its beam only where the geometry turns
 // (row ends, curved rows). One combination is never observable from the echoes: every ranger
 // moved by the same body-frame shift is the vehicle moved the other way (the pose corrections take
-// it). The soft-L1 prior settles it the way a user expects: the fewest mounts moved (the offset
-// of one wrong ranger among correct ones comes out on that ranger, not spread over all). A map whose
-// lane is narrower than the canopy the rangers hear (every ranger reads short) is the same for the
+// it): a gauge freedom in the sense of Triggs et al. 2000, fixed by a choice. The soft-L1 prior
+// settles it the way a user expects: the fewest mounts moved (the offset of one wrong ranger among
+// correct ones comes out on that ranger, not spread over all). A map whose lane is narrower than the canopy the rangers hear (every ranger reads short) is the same for the
 // echoes as every ranger mounted further out; it is reported as the common offset along the beams.
 #pragma once
 
