@@ -78,6 +78,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"initialisation.gyro_bias_sigma_radps", i.gyro_bias_sigma_radps, 1e-9, 10.0},
       {"initialisation.steering_sigma_rad", i.steering_sigma_rad, 1e-9, 10.0},
       {"initialisation.accel_bias_sigma_mps2", i.accel_bias_sigma_mps2, 1e-9, 100.0},
+      {"initialisation.map_heading_sigma_rad", i.map_heading_sigma_rad, 0.0, 1.0},
       {"gps.sigma_scale", g.sigma_scale, 1e-3, 1e3},
       {"gps.sigma_floor_rtk_fixed_m", g.sigma_floor_rtk_fixed_m, 1e-6, 1e3},
       {"gps.sigma_floor_rtk_float_m", g.sigma_floor_rtk_float_m, 1e-6, 1e3},
@@ -177,7 +178,8 @@ FilterConfig ReadConfig(Reader& root) {
     c.initialisation = {i.Number("heading_baseline_m"),     i.Number("heading_sigma_rad"),
                         i.Number("velocity_sigma_mps"),     i.Number("yaw_rate_sigma_radps"),
                         i.Number("acceleration_sigma_mps2"), i.Number("gyro_bias_sigma_radps"),
-                        i.Number("steering_sigma_rad"), i.Number("accel_bias_sigma_mps2")};
+                        i.Number("steering_sigma_rad"), i.Number("accel_bias_sigma_mps2"),
+                        i.Number("map_heading_sigma_rad")};
     i.RejectUnknownKeys();
   }
   {
@@ -273,7 +275,8 @@ nlohmann::ordered_json ConfigDocument(const FilterConfig& c) {
               {"acceleration_sigma_mps2", i.acceleration_sigma_mps2},
               {"gyro_bias_sigma_radps", i.gyro_bias_sigma_radps},
               {"steering_sigma_rad", i.steering_sigma_rad},
-              {"accel_bias_sigma_mps2", i.accel_bias_sigma_mps2}}},
+              {"accel_bias_sigma_mps2", i.accel_bias_sigma_mps2},
+              {"map_heading_sigma_rad", i.map_heading_sigma_rad}}},
       {"gps",
        Object{{"sigma_scale", g.sigma_scale},
               {"sigma_floor_rtk_fixed_m", g.sigma_floor_rtk_fixed_m},

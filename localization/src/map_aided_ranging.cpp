@@ -308,6 +308,24 @@ RowMapRanging::RowMapRanging(const geometry::RowMap& local_map, double row_smoot
   MeasureLaneClearances();
 }
 
+std::optional<double> RowMapRanging::LaneDirectionAt(const Eigen::Vector2d& point, double max_half_width_m,
+                                                     double max_turn_rad) const {
+  if (!point.allFinite()) throw std::invalid_argument("LaneDirectionAt: the point must be finite");
+  const auto nearest = index_.Nearest(point, 1);
+  if (nearest.empty()) return std::nullopt;
+  for (const geometry::Row& row : rows_) {
+    if (geometry::InsideOutline(row, point)) return std::nullopt;
+  }
+  const Eigen::Vector2d tangent = shapes_[nearest.front().second].tangent;
+  const Eigen::Vector2d normal(-tangent.y(), tangent.x());
+  const double min_alignment = std::cos(max_turn_rad);
+  for (const double side : {1.0, -1.0}) {
+    const auto hit = index_.RayCast(point, side * normal, max_half_width_m);
+    if (!hit || std::abs(shapes_[hit->entry].tangent.dot(tangent)) < min_alignment) return std::nullopt;
+  }
+  return std::atan2(tangent.y(), tangent.x());
+}
+
 std::vector<EchoCandidate> RowMapRanging::Candidates(const Eigen::Vector3d& pose, const RangeSensorMount& mount,
                                                      double max_range_m, double window_m) const {
   Buffers buffers;

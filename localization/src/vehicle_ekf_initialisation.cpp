@@ -10,6 +10,20 @@
 // and with the odometry rolled between them (or, without wheel speeds, with a ground speed no
 // robot exceeds). A fix that agrees with no other is never used; the notice counts the fixes
 // discarded.
+//
+// Map-aided initialisation (initialisation.map_heading_sigma_rad > 0 and a row map attached): in a
+// lane the vehicle drives along the rows, so the GNSS need only tell which of the lane's two
+// directions it drives in. When the mean of the pending fixes lies in a lane of the map
+// (RowMapRanging::LaneDirectionAt: rows on both sides within kLaneHalfWidthM, parallel within
+// kLaneTurnRad) with unit direction t, the fixes' coordinates along t are regressed on the distance
+// the wheels rolled (least squares, slope d): |d| must be at least kDirectionSigmas of its standard
+// error (sigma_fix / sqrt(sum (rolled - mean)^2)) and between kMinChordFraction and
+// kMaxChordFraction (the vehicle moves along the lane), and the slope across the lane below
+// kMaxAcrossSlope. The heading is then t or -t (by d's sign; reversed when the wheels turn
+// backwards), with sigma map_heading_sigma_rad. With 5 fixes a second and 0.8 m sigma this needs
+// about 3-4 m of driving instead of the 10-sigma (8 m) baseline. When the baseline comes first and
+// its end is in a lane, its course (0.14 rad) is snapped to the lane's direction within
+// kMaxCourseOffsetRad, with the same sigma.
 #include "rowloc/localization/vehicle_ekf.hpp"
 
 #include <algorithm>
@@ -36,6 +50,16 @@ constexpr double kMaxChordFraction = 1.5;
 constexpr double kAgreementMarginM = 0.2;
 /// Without wheel speeds: no field robot moves faster than this, m/s.
 constexpr double kMaxGroundSpeedMps = 30.0;
+/// Map-aided initialisation: the slope along the lane in its standard errors; the lane's rows within
+/// this on each side, m; their directions within this of each other, rad; the slope across the lane
+/// at most this; fixes at least this many.
+constexpr double kDirectionSigmas = 6.0;
+constexpr double kLaneHalfWidthM = 5.0;
+constexpr double kLaneTurnRad = 0.35;
+constexpr double kMaxAcrossSlope = 0.3;
+/// The long baseline's course snaps to the lane's direction when within this of it, rad.
+constexpr double kMaxCourseOffsetRad = 0.35;
+constexpr std::size_t kMinLaneFixes = 5;
 
 }  // namespace
 
@@ -62,23 +86,88 @@ void VehicleEkf::AccumulateOdometry(double time_s) {
   odometry_time_s_ = time_s;
 }
 
+const VehicleEkf::PendingFix* VehicleEkf::FindAnchor(const PendingFix& current, double baseline_m) const {
+  for (std::size_t a = 0; a < pending_fixes_.size(); ++a) {
+    const PendingFix& candidate = pending_fixes_[a];
+    if ((current.antenna_enu - candidate.antenna_enu).norm() < baseline_m || !FixesAgree(candidate, current)) continue;
+    for (std::size_t m = a + 1; m < pending_fixes_.size(); ++m) {
+      if (FixesAgree(candidate, pending_fixes_[m]) && FixesAgree(pending_fixes_[m], current)) return &candidate;
+    }
+  }
+  return nullptr;
+}
+
+double VehicleEkf::MeanSteering() const {
+  double mean = 0.0;
+  int steered = 0;
+  for (const auto& angle : last_steering_rad_) {
+    if (angle) mean += *angle, ++steered;
+  }
+  return steered > 0 ? mean / steered : 0.0;
+}
+
+double VehicleEkf::CourseToHeading(const Eigen::Vector2d& moved) const {
+  // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
+  // angle (a crabbing swerve robot moves at delta to its heading).
+  double mean_speed = 0.0;
+  for (const double w : last_speed_radps_) mean_speed += w / static_cast<double>(last_speed_radps_.size());
+  double heading = std::atan2(moved.y(), moved.x()) - MeanSteering();
+  if (mean_speed < 0.0) heading += std::numbers::pi;
+  return WrapAngle(heading);
+}
+
+std::optional<double> VehicleEkf::LaneHeading(const PendingFix& current) const {
+  if (pending_fixes_.size() + 1 < kMinLaneFixes || !odometry_time_s_) return std::nullopt;
+  std::vector<const PendingFix*> fixes;
+  for (const PendingFix& f : pending_fixes_) fixes.push_back(&f);
+  fixes.push_back(&current);
+  Eigen::Vector2d mean_position = Eigen::Vector2d::Zero();
+  double mean_rolled = 0.0, sigma = 0.0;
+  for (const PendingFix* f : fixes) {
+    mean_position += f->antenna_enu / static_cast<double>(fixes.size());
+    mean_rolled += f->travelled_m / static_cast<double>(fixes.size());
+    sigma = std::max(sigma, f->sigma_m);
+  }
+  const RowMapRanging& ranging = *map_aided_.ranging();
+  const auto lane = ranging.LaneDirectionAt(mean_position, kLaneHalfWidthM, kLaneTurnRad);
+  if (!lane || !ranging.LaneDirectionAt(current.antenna_enu, kLaneHalfWidthM, kLaneTurnRad)) return std::nullopt;
+  const Eigen::Vector2d along(std::cos(*lane), std::sin(*lane));
+  const Eigen::Vector2d across(-along.y(), along.x());
+  // Least-squares slopes of the along- and across-lane coordinates on the distance rolled.
+  double spread = 0.0, along_slope = 0.0, across_slope = 0.0;
+  for (const PendingFix* f : fixes) {
+    const double r = f->travelled_m - mean_rolled;
+    const Eigen::Vector2d p = f->antenna_enu - mean_position;
+    spread += r * r;
+    along_slope += r * along.dot(p);
+    across_slope += r * across.dot(p);
+  }
+  if (!(spread > 0.0)) return std::nullopt;
+  along_slope /= spread;
+  across_slope /= spread;
+  const double slope_sigma = sigma / std::sqrt(spread);
+  const double speed = std::abs(along_slope);
+  if (speed < kDirectionSigmas * slope_sigma || speed < kMinChordFraction || speed > kMaxChordFraction ||
+      std::abs(across_slope) > kMaxAcrossSlope) {
+    return std::nullopt;
+  }
+  double heading = along_slope > 0.0 ? *lane : *lane + std::numbers::pi;
+  double mean_speed = 0.0;
+  for (const double w : last_speed_radps_) mean_speed += w;
+  if (mean_speed < 0.0) heading += std::numbers::pi;
+  return WrapAngle(heading);
+}
+
 std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& gps, const Eigen::Vector2d& antenna) {
   // The course of the baseline has an error of about sqrt(2) sigma / |baseline| rad: the baseline
   // must also be long against the fix noise (10 sigma: 0.14 rad, inside heading_sigma_rad's default).
   const double fix_sigma = GpsSigma(config_.gps, gps.fix, gps.position->sigma_horizontal_m);
   const PendingFix current{gps.time_s, antenna, fix_sigma, travelled_m_};
+  const double map_sigma = config_.initialisation.map_heading_sigma_rad;
+  std::optional<double> lane_heading;
+  if (map_sigma > 0.0 && map_aided_.ranging() != nullptr) lane_heading = LaneHeading(current);
   const double baseline = std::max(config_.initialisation.heading_baseline_m, kBaselineSigmas * fix_sigma);
-  const PendingFix* anchor = nullptr;
-  for (std::size_t a = 0; a < pending_fixes_.size() && !anchor; ++a) {
-    const PendingFix& candidate = pending_fixes_[a];
-    if ((antenna - candidate.antenna_enu).norm() < baseline || !FixesAgree(candidate, current)) continue;
-    for (std::size_t m = a + 1; m < pending_fixes_.size(); ++m) {
-      if (FixesAgree(candidate, pending_fixes_[m]) && FixesAgree(pending_fixes_[m], current)) {
-        anchor = &candidate;
-        break;
-      }
-    }
-  }
+  const PendingFix* anchor = lane_heading ? &pending_fixes_.front() : FindAnchor(current, baseline);
   if (!anchor) {
     if (pending_fixes_.size() == kMaxPendingFixes) {
       std::vector<PendingFix> kept;
@@ -88,29 +177,27 @@ std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& 
     pending_fixes_.push_back(current);
     return std::nullopt;
   }
-  const Eigen::Vector2d moved = antenna - anchor->antenna_enu;
+  Eigen::Vector2d moved = antenna - anchor->antenna_enu;
   const auto discarded = static_cast<std::size_t>(std::count_if(
       pending_fixes_.begin(), pending_fixes_.end(),
       [&](const PendingFix& f) { return !FixesAgree(f, current); }));
   const std::size_t waited = pending_fixes_.size() + 1;
-  // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
-  // angle (a crabbing swerve robot moves at delta to its heading).
-  double mean_speed = 0.0, mean_steering = 0.0;
-  for (const double w : last_speed_radps_) mean_speed += w / static_cast<double>(last_speed_radps_.size());
-  int steered = 0;
-  for (const auto& angle : last_steering_rad_) {
-    if (angle) mean_steering += *angle, ++steered;
+  double heading = lane_heading ? *lane_heading : CourseToHeading(moved);
+  bool snapped = false;  // the long baseline's course in a lane: the lane's direction instead
+  if (!lane_heading && map_sigma > 0.0 && map_aided_.ranging() != nullptr) {
+    const auto lane = map_aided_.ranging()->LaneDirectionAt(antenna, kLaneHalfWidthM, kLaneTurnRad);
+    if (lane) {
+      const double along = std::abs(WrapAngle(heading - *lane)) < 0.5 * std::numbers::pi ? *lane : WrapAngle(*lane + std::numbers::pi);
+      if (std::abs(WrapAngle(heading - along)) < kMaxCourseOffsetRad) heading = along, snapped = true;
+    }
   }
-  if (steered > 0) mean_steering /= steered;
-  double heading = std::atan2(moved.y(), moved.x()) - mean_steering;
-  if (mean_speed < 0.0) heading += std::numbers::pi;
-  heading = WrapAngle(heading);
+  const double mean_steering = MeanSteering();
   const double c = std::cos(heading), s = std::sin(heading);
   const Eigen::Vector2d& l = vehicle_.gnss_antenna.position_m.head<2>();
   const Eigen::Vector2d reference = antenna - Eigen::Vector2d(c * l.x() - s * l.y(), s * l.x() + c * l.y());
   const double sigma = fix_sigma;
-  Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma,
-                                               std::pow(config_.initialisation.heading_sigma_rad, 2)).asDiagonal();
+  const double heading_sigma = lane_heading || snapped ? map_sigma : config_.initialisation.heading_sigma_rad;
+  Eigen::Matrix3d covariance = Eigen::Vector3d(sigma * sigma, sigma * sigma, heading_sigma * heading_sigma).asDiagonal();
   InitialiseState(gps.time_s, Eigen::Vector3d(reference.x(), reference.y(), heading), covariance, true);
   // Initial speed from the encoders (mean wheel-centre speed), along the mean steering direction.
   double speed = 0.0;
@@ -120,8 +207,14 @@ std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& 
   x_(L::kVx) = speed * std::cos(mean_steering);
   x_(L::kVy) = speed * std::sin(mean_steering);
   std::ostringstream notice;
-  notice << "initialised at t=" << gps.time_s << " s: heading " << heading << " rad from a GNSS baseline of "
-         << moved.norm() << " m (consensus of " << waited << " fixes, " << discarded
+  notice << "initialised at t=" << gps.time_s << " s: heading " << heading << " rad from ";
+  if (lane_heading) {
+    notice << "the lane of the row map, its direction from " << waited << " fixes over "
+           << current.travelled_m - pending_fixes_.front().travelled_m << " m of driving";
+    return notice.str();
+  }
+  if (snapped) notice << "the lane of the row map along the course of ";
+  notice << "a GNSS baseline of " << moved.norm() << " m (consensus of " << waited << " fixes, " << discarded
          << " disagreeing with the others or the odometry discarded)";
   return notice.str();
 }

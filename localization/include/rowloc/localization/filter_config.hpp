@@ -111,6 +111,11 @@ struct InitialisationConfig {
   double gyro_bias_sigma_radps = 0.005;
   double steering_sigma_rad = 0.05;
   double accel_bias_sigma_mps2 = 0.5;  ///< with imu.estimate_accel_bias
+  /// With a row map attached, > 0: the map-aided initialisation (vehicle_ekf_initialisation.cpp):
+  /// once the GNSS course over a shorter baseline shows which way the vehicle drives, and the
+  /// vehicle is in a lane of the map, the heading is the lane's direction with this sigma, rad
+  /// (below the cone's half aperture / k_sigma, the echoes are used at once). 0: off.
+  double map_heading_sigma_rad = 0.0;
 };
 
 /// Fix quality -> covariance: sigma = max(floor of the fix quality, sigma_scale x the receiver's

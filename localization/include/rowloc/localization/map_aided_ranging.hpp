@@ -132,6 +132,15 @@ class RowMapRanging {
     double right_clearance_m = std::numeric_limits<double>::infinity();
   };
 
+  /// The direction of the lane that `point` is in (rad, of the rows' smoothed tangent; the lane
+  /// runs both ways, so phi and phi + pi are the same answer), or none when `point` is not between
+  /// two rows: the nearest segment's tangent t, then rays from `point` along both normals of t must
+  /// each meet a row within max_half_width_m whose tangent is within max_turn_rad of +-t, and
+  /// `point` must not be inside a canopy outline. For a map-aided initialisation: in a lane the
+  /// vehicle drives along the rows. Throws std::invalid_argument for a non-finite point.
+  std::optional<double> LaneDirectionAt(const Eigen::Vector2d& point, double max_half_width_m,
+                                        double max_turn_rad) const;
+
   /// Segments a beam from `pose` (X, Y, phi) can hit within max_range_m, nearest first: the first
   /// hit and every hit whose range is within window_m of it. Empty: the cone meets no segment, or
   /// the sensor is inside a closed outline (Buffers::sensor_inside_outline tells which).

@@ -94,6 +94,8 @@ class MapAidedUpdater {
   /// std::invalid_argument for an invalid map (e.g. no rows), or when the vehicle has no ranger.
   void AttachRowMap(const geometry::RowMap& map);
   bool has_row_map() const { return ranging_ != nullptr; }
+  /// The attached map in the filter's frame, or null.
+  const RowMapRanging* ranging() const { return ranging_.get(); }
   const MapAidedStats& stats() const { return stats_; }
   /// The cache of R-tree box queries of the row map (hits and misses since construction).
   const geometry::SegmentQueryCache& row_search_cache() const { return buffers_.query_cache; }

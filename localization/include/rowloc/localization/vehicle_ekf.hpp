@@ -218,6 +218,18 @@ class VehicleEkf {
     double sigma_m = 0.0;
     double travelled_m = 0.0;
   };
+  /// The oldest pending fix at least baseline_m from `current` that agrees with it and with some
+  /// pending fix between them (the consensus), or null.
+  const PendingFix* FindAnchor(const PendingFix& current, double baseline_m) const;
+  /// The mean steering angle of the last steering message (0 without one), rad.
+  double MeanSteering() const;
+  /// The heading a GNSS displacement gives: its course, reversed when the wheels turn backwards,
+  /// minus the mean steering angle.
+  double CourseToHeading(const Eigen::Vector2d& moved) const;
+  /// Map-aided initialisation (vehicle_ekf_initialisation.cpp): the heading along the lane the
+  /// pending fixes and `current` lie in, its direction from their regression on the distance
+  /// rolled; none until that is certain.
+  std::optional<double> LaneHeading(const PendingFix& current) const;
   /// Two pending fixes agree with each other and with the odometry between them.
   bool FixesAgree(const PendingFix& a, const PendingFix& b) const;
   /// Before initialisation: the wheel-centre distance rolled since the last wheels message.
