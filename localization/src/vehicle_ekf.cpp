@@ -78,7 +78,8 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)),
       traction_(vehicle_, config_, layout_),
       wheel_angles_(config_.wheels, layout_),
-      map_aided_(vehicle_, config_.map_aided, frame_.origin()) {
+      map_aided_(vehicle_, config_.map_aided, frame_.origin()),
+      gnss_bias_(config_.gps, layout_) {
   // Quantiles are costly (Boost.Math root finding): computed once per dimension, not per message.
   for (int m = 1; m <= static_cast<int>(vehicle_.wheels.size()); ++m) {
     wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
@@ -147,9 +148,7 @@ void VehicleEkf::PredictTo(double t) {
       BaseJacobian f;
       PredictStep(vehicle_, layout_, config_, x_, p_, dt, &f);
       smoother_->TransitionBlock(0, f);
-      if (layout_.gnss_bias >= 0) {
-        smoother_->TransitionBlock(layout_.gnss_bias, GnssBiasDecay(layout_, config_.gps, dt) * Eigen::Matrix2d::Identity());
-      }
+      if (gnss_bias_.estimated()) smoother_->TransitionBlock(gnss_bias_.index(), gnss_bias_.Transition(dt));
     } else {
       PredictStep(vehicle_, layout_, config_, x_, p_, dt);
     }
@@ -188,7 +187,7 @@ ProcessResult VehicleEkf::Apply(const formats::GpsMessage& gps) {
   }
   const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
   LinearizedMeasurement& h = update_buffers_.gnss;
-  GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), layout_.gnss_bias, h);
+  gnss_bias_.MeasureAntenna(x_, vehicle_.gnss_antenna.position_m.head<2>(), h);
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
   double gate = gate_gps_;

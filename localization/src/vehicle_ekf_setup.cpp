@@ -207,17 +207,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topLeftCorner<3, 3>() = 0.5 * (pose_covariance + pose_covariance.transpose());
-  if (const int b = layout_.gnss_bias; b >= 0) {
-    // The bias starts at 0 with its stationary variance; a position taken from a fix is that fix
-    // minus the bias: (x, b) = (z - b, b) gives P_xx += s^2 I and P_xb = -s^2 I.
-    const double bias_variance = config_.gps.bias_sigma_m * config_.gps.bias_sigma_m;
-    p_(b, b) = p_(b + 1, b + 1) = bias_variance;
-    if (position_from_gnss) {
-      p_(L::kX, L::kX) += bias_variance;
-      p_(L::kY, L::kY) += bias_variance;
-      p_(L::kX, b) = p_(b, L::kX) = p_(L::kY, b + 1) = p_(b + 1, L::kY) = -bias_variance;
-    }
-  }
+  gnss_bias_.Initialise(x_, p_, position_from_gnss);  // the bias states, if estimated
   time_s_ = t;
   gps_gated_since_s_.reset();
   initialised_ = true;

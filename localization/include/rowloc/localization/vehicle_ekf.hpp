@@ -25,7 +25,9 @@
 // max_prediction_gap_s is a clock or logging fault: the filter drops its state and re-initialises
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
 // out, the filter (not the receiver) is taken to have drifted: the position covariance is inflated
-// by the innovation's outer product and the fix is applied (reported as a notice).
+// by the innovation's outer product and the fix is applied (reported as a notice). With
+// gps.estimate_bias, GnssBiasModel (gnss_bias_model.hpp) gives the bias states' Gauss-Markov
+// transition, their columns of the fix's measurement and their initialisation.
 // Clock faults: |t| > kMaxTimeS is refused; a stamp more than max_time_jump_s from the filter's time
 // is refused and counted (time_jumps_refused), unless a run of such messages shows the whole clock
 // moved (the filter then re-initialises on the new time base, with a notice). A prediction never
@@ -41,6 +43,7 @@
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/fixed_interval_smoother.hpp"
+#include "rowloc/localization/gnss_bias_model.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_updater.hpp"
 #include "rowloc/localization/measurement_models.hpp"
@@ -273,6 +276,8 @@ class VehicleEkf {
   /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
   /// applies what it returns to the full state.
   MapAidedUpdater map_aided_;
+  /// The GNSS-bias states' process, measurement columns and initialisation (if estimated).
+  GnssBiasModel gnss_bias_;
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
