@@ -213,7 +213,7 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   initialised_ = true;
   pending_fixes_.clear();
   wheel_angles_.Unanchor();
-  if (smoother_) smoother_->Start(x_, p_);
+  smoothing_.Start(x_, p_);
 }
 
 void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance) {
@@ -227,7 +227,7 @@ void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Mat
   }
   PredictTo(t);
   time_s_ = t;
-  if (smoother_) BeginTransition({L::kX, L::kY, L::kPhi});  // the pose is set anew
+  smoothing_.BeginTransition(x_, p_, {L::kX, L::kY, L::kPhi});  // the pose is set anew
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topRows<3>().setZero();
@@ -276,36 +276,21 @@ void VehicleEkf::SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrio
 }
 
 void VehicleEkf::EnableSmoothing(bool check_transitions) {
-  if (smoother_) throw std::logic_error("EnableSmoothing: smoothing is already enabled");
-  std::vector<int> angles{L::kPhi};  // wrapped angles; the wheel angles are cumulative, not wrapped
-  for (const int d : layout_.steering) {
-    if (d >= 0) angles.push_back(d);
-  }
-  smoother_.emplace(layout_.size, std::move(angles), check_transitions);
-  if (initialised_) smoother_->Start(x_, p_);
+  smoothing_.Enable(check_transitions);
+  if (initialised_) smoothing_.Start(x_, p_);
 }
 
 std::size_t VehicleEkf::MarkForSmoothing() {
-  if (!smoother_) throw std::logic_error("MarkForSmoothing: smoothing is not enabled (EnableSmoothing)");
-  if (!initialised_) throw std::logic_error("MarkForSmoothing: the filter is not initialised");
-  return smoother_->Mark(time_s_, x_, p_);
+  if (smoothing_.enabled() && !initialised_) throw std::logic_error("MarkForSmoothing: the filter is not initialised");
+  return smoothing_.Mark(time_s_, x_, p_);  // std::logic_error when not enabled
 }
 
 std::vector<SmoothedState> VehicleEkf::FinishSmoothing() {
-  if (!smoother_) throw std::logic_error("FinishSmoothing: smoothing is not enabled (EnableSmoothing)");
-  smoother_->End(x_, p_);
-  const FixedIntervalSmoother recorded = std::move(*smoother_);
-  smoother_.reset();
-  std::vector<SmoothedState> smoothed = recorded.Smooth();
+  std::vector<SmoothedState> smoothed = smoothing_.Finish(x_, p_);
   for (SmoothedState& s : smoothed) {
     for (std::size_t i = 0; layout_.slip_aware() && i < layout_.wheel_count(); ++i) ClampWheelCalibration(s.state, i);
   }
   return smoothed;
-}
-
-void VehicleEkf::BeginTransition(const std::vector<int>& rows_reset) {
-  smoother_->BeginTransition(x_, p_);
-  if (!rows_reset.empty()) smoother_->TransitionZeroRows(rows_reset);
 }
 
 }  // namespace rowloc::localization

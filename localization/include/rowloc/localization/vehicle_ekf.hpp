@@ -36,7 +36,8 @@
 // (its updates skipped, the state dropped and re-initialised without it, except for the GNSS),
 // every change reported as a notice.
 // Smoothing (EnableSmoothing, off by default): the filter records every transition and update for
-// the fixed-interval smoother (fixed_interval_smoother.hpp); the filter's own results do not change.
+// the fixed-interval smoother (fixed_interval_smoother.hpp) through SmoothingRecorder
+// (smoothing_recorder.hpp); the filter's own results do not change.
 #pragma once
 
 #include "rowloc/formats/sensor_messages.hpp"
@@ -48,6 +49,7 @@
 #include "rowloc/localization/map_aided_updater.hpp"
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/sensor_health.hpp"
+#include "rowloc/localization/smoothing_recorder.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/traction_updater.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
@@ -149,7 +151,7 @@ class VehicleEkf {
   /// std::logic_error unless enabled; std::runtime_error from the smoother (fixed_interval_smoother.hpp).
   std::vector<SmoothedState> FinishSmoothing();
   /// The recorder while smoothing is enabled, else null.
-  const FixedIntervalSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
+  const FixedIntervalSmoother* smoother() const { return smoothing_.smoother(); }
 
   bool initialised() const { return initialised_; }
   double time_s() const { return time_s_; }
@@ -240,9 +242,6 @@ class VehicleEkf {
   void ClampWheelCalibration(Eigen::VectorXd& x, std::size_t wheel) const;
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
-  /// For the smoother: the state is about to change other than by an update; rows_reset, if any,
-  /// are set anew (re-anchored: their transition rows are zero).
-  void BeginTransition(const std::vector<int>& rows_reset = {});
 
   mapio::VehicleConfig vehicle_;
   FilterConfig config_;
@@ -294,7 +293,9 @@ class VehicleEkf {
     Eigen::VectorXd step;
   };
   UpdateBuffers update_buffers_;
-  std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
+  /// Records the pass for the fixed-interval smoother while smoothing is enabled (every hook a no-op
+  /// otherwise).
+  SmoothingRecorder smoothing_;
   std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
 
