@@ -1,5 +1,6 @@
 #include "rowloc/localization/process_model.hpp"
 
+#include "rowloc/localization/gnss_bias_model.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 
 #include "column_kernels.hpp"
@@ -202,24 +203,10 @@ void Congruence(const BaseJacobian& f, Eigen::MatrixXd& p) {
   }
 }
 
-/// The GNSS bias's Gauss-Markov step (header): b <- a b, its rows and columns of P scaled by a (F
-/// is diagonal there and the base step does not touch them), plus Q_b = sigma_b^2 (1 - a^2).
-void PropagateGnssBias(const StateLayout& layout, const GpsNoise& gps, Eigen::VectorXd& x, Eigen::MatrixXd& p,
-                       double dt) {
-  const int b = layout.gnss_bias;
-  const double a = GnssBiasDecay(layout, gps, dt);
-  x.segment<2>(b) *= a;
-  p.middleRows<2>(b) *= a;
-  p.middleCols<2>(b) *= a;
-  const double added = gps.bias_sigma_m * gps.bias_sigma_m * -std::expm1(-2.0 * dt / gps.bias_time_constant_s);
-  p(b, b) += added;
-  p(b + 1, b + 1) += added;
-}
-
 }  // namespace
 
 double GnssBiasDecay(const StateLayout& layout, const GpsNoise& gps, double dt_s) {
-  return layout.gnss_bias >= 0 ? std::exp(-dt_s / gps.bias_time_constant_s) : 1.0;
+  return GnssBiasModel(gps, layout).Decay(dt_s);
 }
 
 void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout, const FilterConfig& config,
@@ -229,7 +216,7 @@ void PredictStep(const mapio::VehicleConfig& vehicle, const StateLayout& layout,
   Congruence(f, p);
   if (base_jacobian != nullptr) *base_jacobian = f;
   AddProcessNoise(vehicle, layout, config, before, p, dt);
-  if (layout.gnss_bias >= 0) PropagateGnssBias(layout, config.gps, x, p, dt);
+  if (layout.gnss_bias >= 0) GnssBiasModel(config.gps, layout).Propagate(x, p, dt);
 }
 
 }  // namespace rowloc::localization

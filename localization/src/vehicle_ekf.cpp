@@ -78,7 +78,9 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)),
       traction_(vehicle_, config_, layout_),
       wheel_angles_(config_.wheels, layout_),
-      map_aided_(vehicle_, config_.map_aided, frame_.origin()) {
+      map_aided_(vehicle_, config_.map_aided, frame_.origin()),
+      gnss_bias_(config_.gps, layout_),
+      smoothing_(layout_) {
   // Quantiles are costly (Boost.Math root finding): computed once per dimension, not per message.
   for (int m = 1; m <= static_cast<int>(vehicle_.wheels.size()); ++m) {
     wheel_gates_.push_back(ChiSquareGate(m, config_.wheels.gate_probability));
@@ -88,7 +90,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
 }
 
 void VehicleEkf::Reset() {
-  if (smoother_ && initialised_) smoother_->End(x_, p_);
+  if (initialised_) smoothing_.End(x_, p_);
   initialised_ = false;
   pending_fixes_.clear();
   travelled_m_ = 0.0;
@@ -137,19 +139,17 @@ void VehicleEkf::PredictTo(double t) {
   double remaining = span;
   for (long steps = 0; remaining > 0.0 && steps <= kMaxPredictionSteps; ++steps) {
     const double dt = steps == kMaxPredictionSteps ? remaining : std::min(remaining, step);
-    if (smoother_) BeginTransition();
+    smoothing_.BeginTransition(x_, p_);
     if (layout_.has_wheel_angles()) {  // before the base step: F = F_base (I + dt E J), wheel_angle_model.hpp
       ProjectStates(true);              // kappa mu <= max_model_slip before linearizing 1 / (1 - kappa mu)
       PropagateWheelAngles(vehicle_, layout_, config_, traction_.last_torque_nm(), x_, p_, dt, update_buffers_.wheel_rates);
-      if (smoother_) smoother_->TransitionAddRows(layout_.wheel_angle, dt * update_buffers_.wheel_rates.rates.jacobian);
+      smoothing_.TransitionAddRows(layout_.wheel_angle, dt, update_buffers_.wheel_rates.rates.jacobian);
     }
-    if (smoother_) {
+    if (smoothing_.enabled()) {  // the base Jacobian only for the smoother
       BaseJacobian f;
       PredictStep(vehicle_, layout_, config_, x_, p_, dt, &f);
-      smoother_->TransitionBlock(0, f);
-      if (layout_.gnss_bias >= 0) {
-        smoother_->TransitionBlock(layout_.gnss_bias, GnssBiasDecay(layout_, config_.gps, dt) * Eigen::Matrix2d::Identity());
-      }
+      smoothing_.TransitionBlock(0, f);
+      if (gnss_bias_.estimated()) smoothing_.TransitionBlock(gnss_bias_.index(), gnss_bias_.Transition(dt));
     } else {
       PredictStep(vehicle_, layout_, config_, x_, p_, dt);
     }
@@ -169,7 +169,7 @@ UpdateRecord VehicleEkf::Update(double t, const std::string& sensor, const Vecto
     health_.ObserveRefusal(sensor, "non-finite update");
     throw FilterInputError(text.str());
   }
-  if (smoother_) smoother_->BeginUpdate(x_, p_);
+  smoothing_.BeginUpdate(x_, p_);
   UpdateRecord record{t, sensor, KalmanUpdate(x_, p_, innovation, jacobian, noise, gate, L::kPhi)};
   health_.ObserveUpdate(sensor, record.outcome.accepted);
   return record;
@@ -188,12 +188,12 @@ ProcessResult VehicleEkf::Apply(const formats::GpsMessage& gps) {
   }
   const double sigma = GpsSigma(config_.gps, gps.fix, fix.sigma_horizontal_m);
   LinearizedMeasurement& h = update_buffers_.gnss;
-  GpsAntennaModel(x_, vehicle_.gnss_antenna.position_m.head<2>(), layout_.gnss_bias, h);
+  gnss_bias_.MeasureAntenna(x_, vehicle_.gnss_antenna.position_m.head<2>(), h);
   const Eigen::Matrix2d noise = Eigen::Matrix2d::Identity() * sigma * sigma;
   const Eigen::Vector2d innovation = antenna - h.predicted;
   double gate = gate_gps_;
   if (gps_gated_since_s_ && gps.time_s - *gps_gated_since_s_ > config_.gps.reacquire_after_s) {
-    if (smoother_) BeginTransition();  // added noise: no change of the transition
+    smoothing_.BeginTransition(x_, p_);  // added noise: no change of the transition
     p_.topLeftCorner<2, 2>() += innovation * innovation.transpose();
     gate = std::numeric_limits<double>::infinity();
     std::ostringstream notice;
@@ -301,7 +301,7 @@ void VehicleEkf::ApplyTorques(double time_s, ProcessResult& result) {
 }
 
 void VehicleEkf::Reanchor(int index, double value, double variance) {
-  if (smoother_) BeginTransition({index});
+  smoothing_.BeginTransition(x_, p_, {index});
   p_.row(index).setZero();
   p_.col(index).setZero();
   p_(index, index) = variance;

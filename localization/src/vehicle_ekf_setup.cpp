@@ -207,23 +207,13 @@ void VehicleEkf::InitialiseState(double t, const Eigen::Vector3d& pose, const Ei
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topLeftCorner<3, 3>() = 0.5 * (pose_covariance + pose_covariance.transpose());
-  if (const int b = layout_.gnss_bias; b >= 0) {
-    // The bias starts at 0 with its stationary variance; a position taken from a fix is that fix
-    // minus the bias: (x, b) = (z - b, b) gives P_xx += s^2 I and P_xb = -s^2 I.
-    const double bias_variance = config_.gps.bias_sigma_m * config_.gps.bias_sigma_m;
-    p_(b, b) = p_(b + 1, b + 1) = bias_variance;
-    if (position_from_gnss) {
-      p_(L::kX, L::kX) += bias_variance;
-      p_(L::kY, L::kY) += bias_variance;
-      p_(L::kX, b) = p_(b, L::kX) = p_(L::kY, b + 1) = p_(b + 1, L::kY) = -bias_variance;
-    }
-  }
+  gnss_bias_.Initialise(x_, p_, position_from_gnss);  // the bias states, if estimated
   time_s_ = t;
   gps_gated_since_s_.reset();
   initialised_ = true;
   pending_fixes_.clear();
   wheel_angles_.Unanchor();
-  if (smoother_) smoother_->Start(x_, p_);
+  smoothing_.Start(x_, p_);
 }
 
 void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Matrix3d& covariance) {
@@ -237,7 +227,7 @@ void VehicleEkf::SetPose(double t, const Eigen::Vector3d& pose, const Eigen::Mat
   }
   PredictTo(t);
   time_s_ = t;
-  if (smoother_) BeginTransition({L::kX, L::kY, L::kPhi});  // the pose is set anew
+  smoothing_.BeginTransition(x_, p_, {L::kX, L::kY, L::kPhi});  // the pose is set anew
   x_.head<3>() = pose;
   x_(L::kPhi) = WrapAngle(pose.z());
   p_.topRows<3>().setZero();
@@ -286,36 +276,21 @@ void VehicleEkf::SetWheelCalibrationPrior(const std::vector<WheelCalibrationPrio
 }
 
 void VehicleEkf::EnableSmoothing(bool check_transitions) {
-  if (smoother_) throw std::logic_error("EnableSmoothing: smoothing is already enabled");
-  std::vector<int> angles{L::kPhi};  // wrapped angles; the wheel angles are cumulative, not wrapped
-  for (const int d : layout_.steering) {
-    if (d >= 0) angles.push_back(d);
-  }
-  smoother_.emplace(layout_.size, std::move(angles), check_transitions);
-  if (initialised_) smoother_->Start(x_, p_);
+  smoothing_.Enable(check_transitions);
+  if (initialised_) smoothing_.Start(x_, p_);
 }
 
 std::size_t VehicleEkf::MarkForSmoothing() {
-  if (!smoother_) throw std::logic_error("MarkForSmoothing: smoothing is not enabled (EnableSmoothing)");
-  if (!initialised_) throw std::logic_error("MarkForSmoothing: the filter is not initialised");
-  return smoother_->Mark(time_s_, x_, p_);
+  if (smoothing_.enabled() && !initialised_) throw std::logic_error("MarkForSmoothing: the filter is not initialised");
+  return smoothing_.Mark(time_s_, x_, p_);  // std::logic_error when not enabled
 }
 
 std::vector<SmoothedState> VehicleEkf::FinishSmoothing() {
-  if (!smoother_) throw std::logic_error("FinishSmoothing: smoothing is not enabled (EnableSmoothing)");
-  smoother_->End(x_, p_);
-  const FixedIntervalSmoother recorded = std::move(*smoother_);
-  smoother_.reset();
-  std::vector<SmoothedState> smoothed = recorded.Smooth();
+  std::vector<SmoothedState> smoothed = smoothing_.Finish(x_, p_);
   for (SmoothedState& s : smoothed) {
     for (std::size_t i = 0; layout_.slip_aware() && i < layout_.wheel_count(); ++i) ClampWheelCalibration(s.state, i);
   }
   return smoothed;
-}
-
-void VehicleEkf::BeginTransition(const std::vector<int>& rows_reset) {
-  smoother_->BeginTransition(x_, p_);
-  if (!rows_reset.empty()) smoother_->TransitionZeroRows(rows_reset);
 }
 
 }  // namespace rowloc::localization

@@ -20,13 +20,10 @@
 // terrain under all wheels). The wheel-angle states, when the layout has them, are propagated by
 // wheel_angle_model.hpp before this step.
 // GNSS bias (gps.estimate_bias), per horizontal axis a first-order Gauss-Markov process
-// b' = -b / tau + w (Gelb, "Applied Optimal Estimation", 1974, table 3.8-1; Brown & Hwang,
-// "Introduction to Random Signals and Applied Kalman Filtering", 4th ed., §2.9), discretized
-// exactly: b <- a b with a = exp(-dt / tau), Q_b = sigma_b^2 (1 - a^2), so that a stationary
-// variance sigma_b^2 stays sigma_b^2 and the autocorrelation is sigma_b^2 exp(-|t| / tau).
+// b' = -b / tau + w, discretized exactly (gnss_bias_model.hpp states it and its sources).
 // F is the identity outside the 9 base states and the GNSS bias, and sparse inside the base states
 // (15 off-diagonal entries): P <- F P F^T is computed as column then row operations on the coupled
-// states only, O(nnz n); the bias rows and columns of P are scaled by a.
+// states only, O(nnz n); the bias rows and columns of P are scaled by a = exp(-dt / tau).
 #pragma once
 
 #include "rowloc/localization/filter_config.hpp"

@@ -25,7 +25,9 @@
 // max_prediction_gap_s is a clock or logging fault: the filter drops its state and re-initialises
 // (reported as a notice). GNSS re-acquisition: when every fix for longer than gps.reacquire_after_s was gated
 // out, the filter (not the receiver) is taken to have drifted: the position covariance is inflated
-// by the innovation's outer product and the fix is applied (reported as a notice).
+// by the innovation's outer product and the fix is applied (reported as a notice). With
+// gps.estimate_bias, GnssBiasModel (gnss_bias_model.hpp) gives the bias states' Gauss-Markov
+// transition, their columns of the fix's measurement and their initialisation.
 // Clock faults: |t| > kMaxTimeS is refused; a stamp more than max_time_jump_s from the filter's time
 // is refused and counted (time_jumps_refused), unless a run of such messages shows the whole clock
 // moved (the filter then re-initialises on the new time base, with a notice). A prediction never
@@ -34,17 +36,20 @@
 // (its updates skipped, the state dropped and re-initialised without it, except for the GNSS),
 // every change reported as a notice.
 // Smoothing (EnableSmoothing, off by default): the filter records every transition and update for
-// the fixed-interval smoother (fixed_interval_smoother.hpp); the filter's own results do not change.
+// the fixed-interval smoother (fixed_interval_smoother.hpp) through SmoothingRecorder
+// (smoothing_recorder.hpp); the filter's own results do not change.
 #pragma once
 
 #include "rowloc/formats/sensor_messages.hpp"
 #include "rowloc/geometry/row_map.hpp"
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/fixed_interval_smoother.hpp"
+#include "rowloc/localization/gnss_bias_model.hpp"
 #include "rowloc/localization/kalman_update.hpp"
 #include "rowloc/localization/map_aided_updater.hpp"
 #include "rowloc/localization/measurement_models.hpp"
 #include "rowloc/localization/sensor_health.hpp"
+#include "rowloc/localization/smoothing_recorder.hpp"
 #include "rowloc/localization/state_layout.hpp"
 #include "rowloc/localization/traction_updater.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
@@ -146,7 +151,7 @@ class VehicleEkf {
   /// std::logic_error unless enabled; std::runtime_error from the smoother (fixed_interval_smoother.hpp).
   std::vector<SmoothedState> FinishSmoothing();
   /// The recorder while smoothing is enabled, else null.
-  const FixedIntervalSmoother* smoother() const { return smoother_ ? &*smoother_ : nullptr; }
+  const FixedIntervalSmoother* smoother() const { return smoothing_.smoother(); }
 
   bool initialised() const { return initialised_; }
   double time_s() const { return time_s_; }
@@ -249,9 +254,6 @@ class VehicleEkf {
   void ClampWheelCalibration(Eigen::VectorXd& x, std::size_t wheel) const;
   UpdateRecord Update(double time_s, const std::string& sensor, const VectorRef& innovation,
                       const MatrixRef& jacobian, const MatrixRef& noise, double gate);
-  /// For the smoother: the state is about to change other than by an update; rows_reset, if any,
-  /// are set anew (re-anchored: their transition rows are zero).
-  void BeginTransition(const std::vector<int>& rows_reset = {});
 
   mapio::VehicleConfig vehicle_;
   FilterConfig config_;
@@ -285,6 +287,8 @@ class VehicleEkf {
   /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
   /// applies what it returns to the full state.
   MapAidedUpdater map_aided_;
+  /// The GNSS-bias states' process, measurement columns and initialisation (if estimated).
+  GnssBiasModel gnss_bias_;
   /// Reused by every update (no state: scratch), so that a message allocates nothing for its
   /// linearization, innovation and noise once their sizes repeat: one linearization per kind of
   /// message, whose size never changes (the wheel speeds and the non-holonomic rows share one).
@@ -301,7 +305,9 @@ class VehicleEkf {
     Eigen::VectorXd step;
   };
   UpdateBuffers update_buffers_;
-  std::optional<FixedIntervalSmoother> smoother_;  ///< recording the pass for smoothing, or none
+  /// Records the pass for the fixed-interval smoother while smoothing is enabled (every hook a no-op
+  /// otherwise).
+  SmoothingRecorder smoothing_;
   std::vector<WheelCalibrationPrior> calibration_prior_;  ///< vehicle order, sigmas widened; or empty: the filter file's
 };
 
