@@ -67,6 +67,7 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(ia.gyro_bias_sigma_radps, ib.gyro_bias_sigma_radps);
   EXPECT_EQ(ia.steering_sigma_rad, ib.steering_sigma_rad);
   EXPECT_EQ(ia.accel_bias_sigma_mps2, ib.accel_bias_sigma_mps2);
+  EXPECT_EQ(ia.map_heading_sigma_rad, ib.map_heading_sigma_rad);
   EXPECT_EQ(a.gps.sigma_scale, b.gps.sigma_scale);
   EXPECT_EQ(a.gps.sigma_floor_rtk_fixed_m, b.gps.sigma_floor_rtk_fixed_m);
   EXPECT_EQ(a.gps.sigma_floor_rtk_float_m, b.gps.sigma_floor_rtk_float_m);
@@ -268,7 +269,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryKeyLeftOutKeepsItsDefault) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 70u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 71u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     if (path == "name") continue;
     json edited = base;
@@ -371,7 +372,8 @@ TEST(FilterConfig, NonFiniteAndInvalidJsonAreRejected) {
 /// Numeric keys for which 0 is valid: no encoder filter, a wheel noise without a relative part (the
 /// absolute sigma keeps it positive), calibration states that do not drift, independent wheels'
 /// kappas and radius walks, a carried calibration taken as it is.
-const std::set<std::string> kMayBeZero = {"wheels.encoder_low_pass_time_constant_s",
+const std::set<std::string> kMayBeZero = {"initialisation.map_heading_sigma_rad",  // 0: off
+                                          "wheels.encoder_low_pass_time_constant_s",
                                           "wheels.speed_sigma_fraction",
                                           "slip_aware_odometry.rolling_radius_noise_m_per_sqrt_m",
                                           "slip_aware_odometry.slip_compliance_noise_per_sqrt_m",
