@@ -8,6 +8,7 @@
 #include "rowloc/sim/row_world.hpp"
 #include "rowloc/sim/scenario.hpp"
 #include "rowloc/sim/simulation.hpp"
+#include "one_lane_drive.hpp"
 #include "test_support.hpp"
 
 #include <gmock/gmock.h>
@@ -24,31 +25,10 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct SimRun {
-  sim::Scenario scenario;
-  geometry::RowMap map;
-  std::string sensors;
-  formats::TruthStream truth;
-};
+using SimRun = test::OneLaneDrive;
 
 /// vineyard-002-4us cut to its first lane (about 130 s): same world, vehicle, sensors and seed.
-const SimRun& OneLaneRun() {
-  static const SimRun run = [] {
-    const auto path = test::SourceDir() / "config/scenarios/vineyard-002-4us.json";
-    std::ifstream in(path);
-    nlohmann::json document = nlohmann::json::parse(in);
-    document["route"]["lane_count"] = 1;
-    SimRun r{sim::ParseScenario(document.dump(), "one-lane", path.parent_path()), {}, {}, {}};
-    const sim::RowWorld world(*r.scenario.world);
-    r.map = world.TrueRowMap(r.scenario.row_map_height_m, world.StepForTolerance(1e-3));
-    std::stringstream sensors, truth;
-    sim::RunSimulation(r.scenario, {&sensors, &truth, nullptr, nullptr});
-    r.sensors = sensors.str();
-    r.truth = formats::ParseTruthStream(truth, "truth");
-    return r;
-  }();
-  return run;
-}
+const SimRun& OneLaneRun() { return test::SimulatedOneLaneDrive(); }
 
 struct Errors {
   double across_mean_m = 0.0, across_max_m = 0.0, along_mean_m = 0.0, nees_mean = 0.0;

@@ -6,17 +6,13 @@
 #include "rowloc/formats/sensor_log_reader.hpp"
 #include "rowloc/formats/trajectory_streams.hpp"
 #include "rowloc/localization/vehicle_ekf.hpp"
-#include "rowloc/sim/row_world.hpp"
-#include "rowloc/sim/scenario.hpp"
-#include "rowloc/sim/simulation.hpp"
-#include "test_support.hpp"
+#include "one_lane_drive.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -26,30 +22,15 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct InLaneRun {
-  sim::Scenario scenario;
-  geometry::RowMap map;
-  std::string sensors;
-  formats::TruthStream truth;
-};
+using InLaneRun = test::OneLaneDrive;
 
+/// Switched on inside the second lane, 8 m into the rows, 2 s standing, then 36 m along the lane.
 const InLaneRun& SwitchedOnInALane() {
-  static const InLaneRun run = [] {
-    const auto path = test::SourceDir() / "config/scenarios/vineyard-002-4us.json";
-    std::ifstream in(path);
-    nlohmann::json document = nlohmann::json::parse(in);
+  static const InLaneRun run = test::SimulateVineyard0024us([](nlohmann::json& document) {
     document["route"] = {{"type", "straight"}, {"start", {8.0, 3.75}}, {"heading_rad", 0.0}, {"length_m", 36.0},
                          {"speed_mps", 0.5}, {"accel_mps2", 0.5}, {"max_lateral_accel_mps2", 0.5},
                          {"start_dwell_s", 2.0}, {"end_dwell_s", 2.0}};
-    InLaneRun r{sim::ParseScenario(document.dump(), "in-lane", path.parent_path()), {}, {}, {}};
-    const sim::RowWorld world(*r.scenario.world);
-    r.map = world.TrueRowMap(r.scenario.row_map_height_m, world.StepForTolerance(1e-3));
-    std::stringstream sensors, truth;
-    sim::RunSimulation(r.scenario, {&sensors, &truth, nullptr, nullptr});
-    r.sensors = sensors.str();
-    r.truth = formats::ParseTruthStream(truth, "truth");
-    return r;
-  }();
+  });
   return run;
 }
 
