@@ -101,7 +101,7 @@ struct RangerMountEstimate {
   bool calibrated = false;       ///< false: fewer than min_echoes_per_ranger echoes; kept as configured
   std::size_t echoes = 0;        ///< of this ranger in the drive's calibrated span
   std::size_t echoes_used = 0;   ///< associated with a row in the last pass
-  double rms_before_m = 0.0;     ///< residual RMS of the used echoes at the configured mount (first pass)
+  double rms_before_m = 0.0;     ///< residual RMS of the used echoes at the configured mount and the uncorrected reference (first pass)
   double rms_after_m = 0.0;      ///< at the estimate (last pass)
 };
 
