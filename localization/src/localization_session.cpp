@@ -187,7 +187,7 @@ SessionStep LocalizationSession::Process(const formats::SensorMessage& message) 
 void LocalizationSession::AttachRowMap(const geometry::RowMap& map) {
   ekf_.AttachRowMap(map);
   if (!options_.check_ranger_mounts) return;
-  mount_monitor_.emplace(map, header_.origin, vehicle_.ultrasonic, ekf_.config().map_aided);
+  mount_monitor_.emplace(ekf_.row_map_ranging(), vehicle_.ultrasonic, ekf_.config().map_aided);
 }
 
 void LocalizationSession::CheckRangerMounts(const formats::SensorMessage& message, SessionStep& step) {

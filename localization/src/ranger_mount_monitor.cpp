@@ -17,15 +17,16 @@ void CheckPositive(const char* name, double value) {
 
 }  // namespace
 
-RangerMountMonitor::RangerMountMonitor(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin,
+RangerMountMonitor::RangerMountMonitor(std::shared_ptr<const RowMapRanging> ranging,
                                        std::vector<mapio::SensorMount> mounts, const MapAidedConfig& map_aided,
                                        RangerMountMonitorConfig config)
-    : ranging_(map, filter_origin, map_aided.row_smoothing_m),
+    : ranging_(std::move(ranging)),
       mounts_(std::move(mounts)),
       map_aided_(map_aided),
       config_(std::move(config)),
       streak_(mounts_.size(), 0),
       suspect_(mounts_.size(), false) {
+  if (!ranging_) throw std::invalid_argument("ranger mount monitor: no row map");
   CheckPositive("window_s", config_.window_s);
   CheckPositive("check_every_s", config_.check_every_s);
   CheckPositive("min_span_s", config_.min_span_s);
@@ -77,7 +78,7 @@ bool RangerMountMonitor::Check(double time_s) {
   const std::vector<EchoRecord> echoes(echoes_.begin(), echoes_.end());
   RangerMountFit fit;
   try {
-    fit = FitRangerMounts(ranging_, mounts_, map_aided_.cone_half_angle_rad, map_aided_.max_range_m, knots, echoes,
+    fit = FitRangerMounts(*ranging_, mounts_, map_aided_.cone_half_angle_rad, map_aided_.max_range_m, knots, echoes,
                           config_.fit);
   } catch (const RangerMountFitError&) {
     // Echoes that mostly meet no row: not judged here (map_agreement.hpp reports it); keep the findings.

@@ -30,6 +30,10 @@ std::optional<double> Feed(RangerMountMonitor& monitor, const test::SyntheticDri
   return first_change;
 }
 
+std::shared_ptr<const RowMapRanging> Ranging(const geometry::RowMap& map) {
+  return std::make_shared<const RowMapRanging>(map, map.origin, 2.0);
+}
+
 test::SyntheticDrive DriveOnStraightRows() {
   const geometry::RowMap map = StraightRows();
   const RowMapRanging ranging(map, map.origin, 2.0);
@@ -40,7 +44,7 @@ TEST(RangerMountMonitor, ReportsTheRangerThatIsOffOnceTheWindowAndTheConfirmatio
   std::vector<mapio::SensorMount> configured = Rangers();
   configured[2].position_m.y() = -0.45;  // us_front_right written 5 cm inward: it sits 5 cm further along its beam
   const geometry::RowMap map = StraightRows();
-  RangerMountMonitor monitor(map, map.origin, configured, MapAidedConfig{});
+  RangerMountMonitor monitor(Ranging(map), configured, MapAidedConfig{});
   const std::optional<double> reported = Feed(monitor, DriveOnStraightRows());
   ASSERT_TRUE(reported.has_value());
   // Window of 10 s before the first fit, then two fits 5 s apart.
@@ -58,7 +62,7 @@ TEST(RangerMountMonitor, ReportsTheRangerThatIsOffOnceTheWindowAndTheConfirmatio
 
 TEST(RangerMountMonitor, NeverReportsRightMounts) {
   const geometry::RowMap map = StraightRows();
-  RangerMountMonitor monitor(map, map.origin, Rangers(), MapAidedConfig{});
+  RangerMountMonitor monitor(Ranging(map), Rangers(), MapAidedConfig{});
   EXPECT_FALSE(Feed(monitor, DriveOnStraightRows()).has_value());
   EXPECT_TRUE(monitor.suspects().empty());
   EXPECT_GT(monitor.checks(), 10u);
@@ -66,7 +70,7 @@ TEST(RangerMountMonitor, NeverReportsRightMounts) {
 
 TEST(RangerMountMonitor, ARestartEmptiesTheWindowAndAJumpRestartsIt) {
   const geometry::RowMap map = StraightRows();
-  RangerMountMonitor monitor(map, map.origin, Rangers(), MapAidedConfig{});
+  RangerMountMonitor monitor(Ranging(map), Rangers(), MapAidedConfig{});
   const test::SyntheticDrive drive = DriveOnStraightRows();
   for (std::size_t k = 0; k < 60; ++k) monitor.ObservePose(drive.reference[k].time_s, drive.reference[k].pose, {0.5, 0, 0});
   EXPECT_TRUE(monitor.Check(drive.reference[59].time_s) || monitor.checks() == 1u);
@@ -83,18 +87,18 @@ TEST(RangerMountMonitor, RefusesBadSettingsAndUnknownRangers) {
   const geometry::RowMap map = StraightRows();
   RangerMountMonitorConfig config;
   config.window_s = 5.0;  // below min_span_s
-  EXPECT_THROW(RangerMountMonitor(map, map.origin, Rangers(), MapAidedConfig{}, config), std::invalid_argument);
+  EXPECT_THROW(RangerMountMonitor(Ranging(map), Rangers(), MapAidedConfig{}, config), std::invalid_argument);
   config = {};
   config.check_every_s = -1.0;
-  EXPECT_THROW(RangerMountMonitor(map, map.origin, Rangers(), MapAidedConfig{}, config), std::invalid_argument);
+  EXPECT_THROW(RangerMountMonitor(Ranging(map), Rangers(), MapAidedConfig{}, config), std::invalid_argument);
   config = {};
   config.confirmations = 0;
-  EXPECT_THROW(RangerMountMonitor(map, map.origin, Rangers(), MapAidedConfig{}, config), std::invalid_argument);
+  EXPECT_THROW(RangerMountMonitor(Ranging(map), Rangers(), MapAidedConfig{}, config), std::invalid_argument);
   config = {};
   config.fit.range_sigma_m = 0.0;
-  EXPECT_THROW(RangerMountMonitor(map, map.origin, Rangers(), MapAidedConfig{}, config), std::invalid_argument);
-  EXPECT_THROW(RangerMountMonitor(geometry::RowMap{}, map.origin, Rangers(), MapAidedConfig{}), std::invalid_argument);
-  RangerMountMonitor monitor(map, map.origin, Rangers(), MapAidedConfig{});
+  EXPECT_THROW(RangerMountMonitor(Ranging(map), Rangers(), MapAidedConfig{}, config), std::invalid_argument);
+  EXPECT_THROW(RangerMountMonitor(nullptr, Rangers(), MapAidedConfig{}), std::invalid_argument);
+  RangerMountMonitor monitor(Ranging(map), Rangers(), MapAidedConfig{});
   EXPECT_THROW(monitor.ObserveEcho(1.0, 4, 1.0), std::invalid_argument);
 }
 

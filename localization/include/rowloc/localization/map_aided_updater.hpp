@@ -96,6 +96,8 @@ class MapAidedUpdater {
   bool has_row_map() const { return ranging_ != nullptr; }
   /// The attached map in the filter's frame, or null.
   const RowMapRanging* ranging() const { return ranging_.get(); }
+  /// The same, shared (the session's mount check fits against it instead of building its own).
+  std::shared_ptr<const RowMapRanging> shared_ranging() const { return ranging_; }
   const MapAidedStats& stats() const { return stats_; }
   /// The cache of R-tree box queries of the row map (hits and misses since construction).
   const geometry::SegmentQueryCache& row_search_cache() const { return buffers_.query_cache; }

@@ -28,6 +28,7 @@
 
 #include <cstddef>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,12 +63,11 @@ struct RangerMountFinding {
 
 class RangerMountMonitor {
  public:
-  /// map: the row map the filter uses (re-expressed into filter_origin's frame as the filter does);
-  /// mounts: the vehicle's ultrasonic list. Throws std::invalid_argument for an invalid map or
-  /// configuration (non-positive times, window below min_span_s).
-  RangerMountMonitor(const geometry::RowMap& map, const geometry::GeoOrigin& filter_origin,
-                     std::vector<mapio::SensorMount> mounts, const MapAidedConfig& map_aided,
-                     RangerMountMonitorConfig config = {});
+  /// ranging: the row map the filter uses, in its frame (VehicleEkf::row_map_ranging: shared, not
+  /// built twice); mounts: the vehicle's ultrasonic list. Throws std::invalid_argument for a null
+  /// map or an invalid configuration (non-positive times, window below min_span_s).
+  RangerMountMonitor(std::shared_ptr<const RowMapRanging> ranging, std::vector<mapio::SensorMount> mounts,
+                     const MapAidedConfig& map_aided, RangerMountMonitorConfig config = {});
 
   /// The filter's pose (X, Y, phi) and body rates (v_x, v_y, r) at time_s (the motion between
   /// knots is dead-reckoned from the rates: the filter's positions jump with its updates); kept
@@ -91,7 +91,7 @@ class RangerMountMonitor {
  private:
   void DropBefore(double time_s);
 
-  RowMapRanging ranging_;
+  std::shared_ptr<const RowMapRanging> ranging_;
   std::vector<mapio::SensorMount> mounts_;
   MapAidedConfig map_aided_;
   RangerMountMonitorConfig config_;

@@ -124,6 +124,8 @@ class VehicleEkf {
   /// ultrasonic sensor.
   void AttachRowMap(const geometry::RowMap& map);
   bool has_row_map() const { return map_aided_.has_row_map(); }
+  /// The attached row map in the filter's frame, with its spatial index; null without a map.
+  std::shared_ptr<const RowMapRanging> row_map_ranging() const { return map_aided_.shared_ranging(); }
   const MapAidedStats& map_aided_stats() const { return map_aided_.stats(); }
   /// The filter's cache of R-tree box queries of the row map (hits and misses since construction).
   const geometry::SegmentQueryCache& row_search_cache() const { return map_aided_.row_search_cache(); }
