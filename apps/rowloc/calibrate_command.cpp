@@ -15,6 +15,7 @@
 #include "rowloc/calibration/drive_record.hpp"
 #include "rowloc/calibration/ranger_calibration.hpp"
 #include "rowloc/localization/filter_choice.hpp"
+#include "rowloc/mapio/input_file.hpp"
 #include "rowloc/mapio/output_file.hpp"
 #include "rowloc/mapio/row_map_geojson.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
@@ -28,7 +29,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <sstream>
 #include <string>
 
 namespace rowloc::apps {
@@ -37,14 +37,6 @@ namespace {
 struct CalibrateOptions {
   std::string log_path, vehicle_path, filter_path, map_path, config_path, output_path, vehicle_out_path;
 };
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -96,7 +88,7 @@ void LogTable(const calibration::RangerMountFit& c) {
 
 /// The vehicle file as read, with the calibrated mounts; a relative recommended_filter re-pointed.
 std::string CalibratedVehicleJson(const CalibrateOptions& o, const calibration::RangerMountFit& c) {
-  nlohmann::ordered_json document = nlohmann::ordered_json::parse(ReadText(o.vehicle_path));
+  nlohmann::ordered_json document = nlohmann::ordered_json::parse(mapio::ReadInputFile(o.vehicle_path, mapio::kMaxConfigFileBytes, "vehicle file"));
   for (auto& sensor : document.at("ultrasonic")) {
     for (const calibration::RangerMountEstimate& r : c.rangers) {
       if (!r.calibrated || sensor.at("name") != r.name) continue;
@@ -123,7 +115,9 @@ void RunCalibrate(const CalibrateOptions& o) {
   const localization::FilterChoice filter = localization::ChooseFilter(o.filter_path, vehicle_file, o.vehicle_path);
   const calibration::RangerCalibrationConfig config =
       o.config_path.empty() ? calibration::RangerCalibrationConfig{}
-                            : calibration::ParseRangerCalibrationConfig(ReadText(o.config_path), o.config_path);
+                            : calibration::ParseRangerCalibrationConfig(
+                                  mapio::ReadInputFile(o.config_path, mapio::kMaxConfigFileBytes, "calibration settings file"),
+                                  o.config_path);
   geometry::RowMap map;
   try {
     map = mapio::ReadRowMapGeoJson(o.map_path);

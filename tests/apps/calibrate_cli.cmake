@@ -51,3 +51,9 @@ rowloc_command_test(tools.mount_sweep_measures_a_case ON
   --rowloc $<TARGET_FILE:rowloc> --out ${_cal_out}/mount-sweep)
 rowloc_command_test(tools.mount_sweep_rejects_an_unknown_case OFF "unknown case sideways"
   ${PROJECT_SOURCE_DIR}/tools/mount-sweep ${_cal_data}/one-lane.json --cases sideways --rowloc $<TARGET_FILE:rowloc>)
+# The settings are read as every configuration file is (mapio::ReadInputFile): a device that never
+# ends is refused before a byte is read.
+rowloc_cli_test(calibrate_refuses_an_endless_settings_file OFF "/dev/zero: is a character device, not a regular file"
+                calibrate ${PROJECT_SOURCE_DIR}/tests/data/logs/vineyard-002-1us-echoes.ndjson
+                --vehicle ${_cal_vehicle} --map ${PROJECT_SOURCE_DIR}/maps/sample-vineyard.geojson
+                --config /dev/zero -o ${_cal_out}/x.json)
