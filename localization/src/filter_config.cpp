@@ -70,6 +70,10 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"slip_aware_odometry.carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m, 0.0, 1.0},
       {"slip_aware_odometry.carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma, 0.0, 1e3},
       {"slip_aware_odometry.traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s, 1e-9, 10.0},
+      {"slip_aware_odometry.terrain_change.cusum_drift_sigma", s.terrain_change.cusum_drift_sigma, 0.0, 100.0},
+      {"slip_aware_odometry.terrain_change.cusum_threshold_sigma", s.terrain_change.cusum_threshold_sigma, 1e-3, 1e6},
+      {"slip_aware_odometry.terrain_change.radius_sigma_fraction", s.terrain_change.radius_sigma_fraction, 1e-6, 1.0},
+      {"slip_aware_odometry.terrain_change.max_yaw_rate_radps", s.terrain_change.max_yaw_rate_radps, 0.0, 100.0},
       {"initialisation.heading_baseline_m", i.heading_baseline_m, 0.1, 100.0},
       {"initialisation.heading_sigma_rad", i.heading_sigma_rad, 1e-6, 10.0},
       {"initialisation.velocity_sigma_mps", i.velocity_sigma_mps, 1e-6, 100.0},
@@ -170,7 +174,12 @@ FilterConfig ReadConfig(Reader& root) {
                              s.Bool("traction_from_acceleration"), s.Number("torque_sigma_nm"),
                              s.Number("traction_noise_per_sqrt_s"), s.Bool("slip_with_rolling_radius"),
                              s.Number("carried_rolling_radius_change_sigma_m"),
-                             s.Number("carried_slip_compliance_change_sigma")};
+                             s.Number("carried_slip_compliance_change_sigma"), {}};
+    Reader t = s.Object("terrain_change");
+    c.slip_aware_odometry.terrain_change = {t.Bool("enabled"), t.Number("cusum_drift_sigma"),
+                                            t.Number("cusum_threshold_sigma"), t.Number("radius_sigma_fraction"),
+                                            t.Number("max_yaw_rate_radps")};
+    t.RejectUnknownKeys();
     s.RejectUnknownKeys();
   }
   {
@@ -266,7 +275,13 @@ nlohmann::ordered_json ConfigDocument(const FilterConfig& c) {
               {"traction_noise_per_sqrt_s", s.traction_noise_per_sqrt_s},
               {"slip_with_rolling_radius", s.slip_with_rolling_radius},
               {"carried_rolling_radius_change_sigma_m", s.carried_rolling_radius_change_sigma_m},
-              {"carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma}}},
+              {"carried_slip_compliance_change_sigma", s.carried_slip_compliance_change_sigma},
+              {"terrain_change",
+               Object{{"enabled", s.terrain_change.enabled},
+                      {"cusum_drift_sigma", s.terrain_change.cusum_drift_sigma},
+                      {"cusum_threshold_sigma", s.terrain_change.cusum_threshold_sigma},
+                      {"radius_sigma_fraction", s.terrain_change.radius_sigma_fraction},
+                      {"max_yaw_rate_radps", s.terrain_change.max_yaw_rate_radps}}}}},
       {"initialisation",
        Object{{"heading_baseline_m", i.heading_baseline_m},
               {"heading_sigma_rad", i.heading_sigma_rad},

@@ -20,6 +20,8 @@ constexpr double kMinRadiusFactor = 0.5;
 constexpr double kMaxRadiusFactor = 1.5;
 /// Measurement variance of an excluded encoder's row: its reading then moves nothing (rad/s)^2.
 constexpr double kExcludedVariance = 1e12;
+/// Ground changes are not looked for this long after an IMU update was gated out, s.
+constexpr double kImuDisagreementHoldS = 1.0;
 
 namespace {
 
@@ -78,6 +80,7 @@ VehicleEkf::VehicleEkf(mapio::VehicleConfig vehicle, FilterConfig config, const 
       gate_vio_(ChiSquareGate(2, config_.vio.gate_probability)),
       traction_(vehicle_, config_, layout_),
       wheel_angles_(config_.wheels, layout_),
+      terrain_change_(vehicle_.wheels.size(), config_.slip_aware_odometry.terrain_change),
       map_aided_(vehicle_, config_.map_aided, frame_.origin()),
       gnss_bias_(config_.gps, layout_),
       smoothing_(layout_) {
@@ -96,6 +99,8 @@ void VehicleEkf::Reset() {
   travelled_m_ = 0.0;
   odometry_time_s_.reset();
   wheel_angles_.Unanchor();
+  terrain_change_.Reset();
+  imu_gated_s_ = -std::numeric_limits<double>::infinity();
   x_ = Eigen::VectorXd::Zero(layout_.size);
   p_ = Eigen::MatrixXd::Zero(layout_.size, layout_.size);
 }
@@ -223,6 +228,7 @@ ProcessResult VehicleEkf::Apply(const formats::ImuMessage& imu) {
   const Eigen::Matrix3d noise = Eigen::Vector3d(a, a, g).asDiagonal();
   const Eigen::Vector3d innovation = z - h.predicted;
   result.updates.push_back(Update(imu.time_s, imu.sensor, innovation, h.jacobian, noise, gate_imu_));
+  if (!result.updates.back().outcome.accepted) imu_gated_s_ = imu.time_s;
   return result;
 }
 
@@ -252,6 +258,7 @@ ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
       }
     }
     b.innovation = z - b.wheels.predicted;
+    if (auto notice = WidenRadiiOnTerrainChange()) result.notice = result.notice ? *result.notice + "; " + *notice : *notice;
     const bool iterated = config_.wheels.speed_update_iterations > 1;
     if (iterated) {
       b.prior_state = x_;
@@ -268,6 +275,45 @@ ProcessResult VehicleEkf::Apply(const formats::WheelsMessage& wheels) {
   b.innovation = -b.wheels.predicted;
   result.updates.push_back(Update(wheels.time_s, "nonholonomic", b.innovation, b.wheels.jacobian, b.noise, gate));
   return result;
+}
+
+std::optional<std::string> VehicleEkf::WidenRadiiOnTerrainChange() {
+  const TerrainChangeConfig& c = config_.slip_aware_odometry.terrain_change;
+  if (!c.enabled || !layout_.slip_aware()) return std::nullopt;
+  // In a turn the slips change and come back; within a second of an IMU update gated out the IMU,
+  // not the ground, may be what changed (a dead IMU reads zeros: two updates are gated, then the
+  // filter follows it and the wheels disagree with the state it dragged). Either way the sums
+  // restart.
+  if (std::abs(x_(L::kYawRate)) > c.max_yaw_rate_radps || time_s_ - imu_gated_s_ < kImuDisagreementHoldS) {
+    terrain_change_.Reset();
+    return std::nullopt;
+  }
+  UpdateBuffers& b = update_buffers_;
+  const Eigen::Index m = b.innovation.size();
+  b.normalized.resize(m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const double s = b.wheels.jacobian.row(i) * p_ * b.wheels.jacobian.row(i).transpose() + b.noise(i, i);
+    b.normalized(i) = b.noise(i, i) >= kExcludedVariance ? std::numeric_limits<double>::quiet_NaN()
+                                                          : b.innovation(i) / std::sqrt(s);
+  }
+  const std::vector<std::size_t>& fired = terrain_change_.Observe(b.normalized);
+  std::string wheels;
+  std::vector<std::size_t> widened;
+  for (const std::size_t i : fired) {
+    // Ground halves or doubles a wheel's speed at most; a stuck or dead encoder (0 rad/s) is left
+    // to the sensor health, not learnt as a radius.
+    const double ratio = last_speed_radps_[i] / b.wheels.predicted(static_cast<Eigen::Index>(i));
+    if (ratio >= 0.5 && ratio <= 2.0) widened.push_back(i);
+  }
+  if (widened.empty()) return std::nullopt;
+  smoothing_.BeginTransition(x_, p_);
+  for (const std::size_t i : widened) {
+    const double sigma = c.radius_sigma_fraction * vehicle_.wheels[i].nominal_radius_m;
+    const int r = layout_.rolling_radius[i];
+    p_(r, r) += sigma * sigma;
+    wheels += (wheels.empty() ? "" : ", ") + vehicle_.wheels[i].name;
+  }
+  return "ground change under " + wheels + ": the wheel speed left the rolling radius's prediction, its sigma widened";
 }
 
 void VehicleEkf::IterateWheelSpeedUpdate(const VectorRef& measured_radps) {

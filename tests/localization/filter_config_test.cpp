@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -54,6 +55,12 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(sa.rolling_radius_prior_wheel_correlation, sb.rolling_radius_prior_wheel_correlation);
   EXPECT_EQ(sa.carried_rolling_radius_change_sigma_m, sb.carried_rolling_radius_change_sigma_m);
   EXPECT_EQ(sa.carried_slip_compliance_change_sigma, sb.carried_slip_compliance_change_sigma);
+  const TerrainChangeConfig &ta = sa.terrain_change, &tb = sb.terrain_change;
+  EXPECT_EQ(ta.enabled, tb.enabled);
+  EXPECT_EQ(ta.cusum_drift_sigma, tb.cusum_drift_sigma);
+  EXPECT_EQ(ta.cusum_threshold_sigma, tb.cusum_threshold_sigma);
+  EXPECT_EQ(ta.radius_sigma_fraction, tb.radius_sigma_fraction);
+  EXPECT_EQ(ta.max_yaw_rate_radps, tb.max_yaw_rate_radps);
   EXPECT_EQ(sa.torque_sigma_nm, sb.torque_sigma_nm);
   EXPECT_EQ(sa.traction_noise_per_sqrt_s, sb.traction_noise_per_sqrt_s);
   EXPECT_EQ(sa.traction_from_acceleration, sb.traction_from_acceleration);
@@ -269,7 +276,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryKeyLeftOutKeepsItsDefault) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 71u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 76u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     if (path == "name") continue;
     json edited = base;
@@ -301,6 +308,9 @@ TEST(FilterConfig, UnknownKeysAreNamed) {
   edited = DefaultJson();
   edited["slip_aware_odometry"]["extra"] = true;
   EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.extra: unknown key"));
+  edited = DefaultJson();
+  edited["slip_aware_odometry"]["terrain_change"]["threshold"] = 5.0;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("slip_aware_odometry.terrain_change.threshold: unknown key"));
   edited = DefaultJson();
   edited["lidar"] = json::object();
   EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: lidar: unknown key"));
@@ -382,7 +392,9 @@ const std::set<std::string> kMayBeZero = {"initialisation.map_heading_sigma_rad"
                                           "slip_aware_odometry.rolling_radius_prior_wheel_correlation",
                                           "slip_aware_odometry.torque_sigma_nm",
                                           "slip_aware_odometry.carried_rolling_radius_change_sigma_m",
-                                          "slip_aware_odometry.carried_slip_compliance_change_sigma"};
+                                          "slip_aware_odometry.carried_slip_compliance_change_sigma",
+                                          "slip_aware_odometry.terrain_change.cusum_drift_sigma",  // 0: no allowance
+                                          "slip_aware_odometry.terrain_change.max_yaw_rate_radps"};  // 0: straight only
 
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();
@@ -477,11 +489,12 @@ TEST(FilterConfig, MapAidedMethodNamesRoundTripAndUnknownOnesAreNamed) {
 
 TEST(FilterConfig, ZeroIsValidWhereItMeansNoneButNegativeIsNot) {
   for (const std::string& path : kMayBeZero) {
-    const auto dot = path.find('.');
+    std::string pointer = "/" + path;  // "a.b.c" -> "/a/b/c"
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
     json edited = DefaultJson();
-    edited[path.substr(0, dot)][path.substr(dot + 1)] = 0.0;
+    edited[json::json_pointer(pointer)] = 0.0;
     EXPECT_NO_THROW(ParseFilterConfig(edited.dump(), "edited.json")) << path;
-    edited[path.substr(0, dot)][path.substr(dot + 1)] = -0.01;
+    edited[json::json_pointer(pointer)] = -0.01;
     EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: " + path)) << path;
   }
 }

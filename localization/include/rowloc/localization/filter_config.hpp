@@ -30,6 +30,7 @@
 #pragma once
 
 #include "rowloc/formats/gnss_fix_quality.hpp"
+#include "rowloc/localization/terrain_change_detector.hpp"
 
 #include <Eigen/Core>
 
@@ -99,6 +100,9 @@ struct SlipAwareOdometryConfig {
   /// ones, lies within 2.5 sigma).
   double carried_rolling_radius_change_sigma_m = 2e-3;
   double carried_slip_compliance_change_sigma = 0.5;
+  /// A change of terrain under a wheel detected from its speed innovations, and R_w's variance
+  /// widened there (terrain_change_detector.hpp). On by default.
+  TerrainChangeConfig terrain_change;
 };
 
 /// Initial uncertainty and the heading alignment from GNSS (docs/localization-filter.md §2).

@@ -51,6 +51,7 @@
 #include "rowloc/localization/sensor_health.hpp"
 #include "rowloc/localization/smoothing_recorder.hpp"
 #include "rowloc/localization/state_layout.hpp"
+#include "rowloc/localization/terrain_change_detector.hpp"
 #include "rowloc/localization/traction_updater.hpp"
 #include "rowloc/localization/wheel_angle_model.hpp"
 #include "rowloc/localization/wheel_angle_updater.hpp"
@@ -172,6 +173,9 @@ class VehicleEkf {
   /// ultrasonic), "wheels.<wheel>" for one encoder, or the update's name ("wheels", "nonholonomic",
   /// "steering", "torque", "wheel_angles").
   const SensorHealthMonitor& health() const { return health_; }
+  /// Ground changes reported per wheel since construction (vehicle order; all 0 unless
+  /// slip_aware_odometry.terrain_change.enabled): terrain_change_detector.hpp.
+  const std::vector<std::size_t>& terrain_changes() const { return terrain_change_.alarms(); }
   /// Prediction steps made since construction (at most kMaxPredictionSteps per message).
   std::size_t prediction_steps() const { return prediction_steps_; }
   /// Prediction steps per message at most, whatever max_prediction_step_s and the gap: the step
@@ -205,6 +209,12 @@ class VehicleEkf {
   bool ApplyWheelAngles(const formats::WheelsMessage& wheels, ProcessResult& result);
   /// The iterations after the first of the wheel-speed update (wheels.speed_update_iterations).
   void IterateWheelSpeedUpdate(const VectorRef& measured_radps);
+  /// Before the wheel-speed update (its innovation and noise in update_buffers_): feeds the terrain
+  /// change detector and widens the R_w variance of each wheel it reports (terrain_change_detector.hpp),
+  /// unless the wheel's speed is outside 0.5-2 times its prediction (a dead encoder). Not in a turn
+  /// (|yaw rate| above max_yaw_rate_radps) nor within kImuDisagreementHoldS of a gated IMU update:
+  /// the sums restart. Returns the notice naming the widened wheels, if any.
+  std::optional<std::string> WidenRadiiOnTerrainChange();
   /// The torque update of the traction states (the last torques, vehicle order; `torque`); a step
   /// beyond the gate re-anchors them to the torques instead.
   void ApplyTorques(double time_s, ProcessResult& result);
@@ -285,6 +295,10 @@ class VehicleEkf {
   TractionUpdater traction_;
   /// When and how the encoders' angles update the wheel-angle states (anchoring).
   WheelAngleUpdater wheel_angles_;
+  /// A change of terrain under a wheel from its speed innovations (if enabled).
+  TerrainChangeDetector terrain_change_;
+  /// When an IMU update was last gated out, s (-inf: none since the last reset).
+  double imu_gated_s_ = -std::numeric_limits<double>::infinity();
   std::vector<std::optional<double>> last_steering_rad_;
   /// The echoes' map-aided measurement (row map, rangers, counts, map agreement); the filter
   /// applies what it returns to the full state.
@@ -298,6 +312,7 @@ class VehicleEkf {
     LinearizedMeasurement gnss, imu, wheels, steering, vio;
     WheelAngleScratch wheel_rates;      ///< the wheel-angle prediction's omega(x), J and products
     Eigen::VectorXd innovation;
+    Eigen::VectorXd normalized;  ///< the wheel speeds' innovations over their sigmas (terrain change)
     Eigen::MatrixXd noise;
     std::vector<std::size_t> steered_wheels;  ///< the vehicle wheels with a steering angle
     std::vector<double> steered_angles;       ///< their angles
