@@ -21,6 +21,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rowloc::localization {
@@ -129,6 +130,43 @@ TEST(VehicleEkfTerrainChange, WithoutTheDetectionTheFilterIsOffAlongTheRowsAndSu
   EXPECT_TRUE(without.notice.empty());
   EXPECT_GT(without.along_nees, 15.0);
   EXPECT_GT(without.along_rms_m, 1.5 * with.along_rms_m);
+}
+
+// A widened radius is process noise to the fixed-interval smoother (a transition with F = I): the
+// recording checks every transition, and the smoothed track is closer to the truth than the filter's.
+TEST(VehicleEkfTerrainChange, TheSmootherTakesTheWidenedRadiiAsProcessNoise) {
+  const test::OneLaneDrive& run = AcrossBands();
+  std::istringstream log(run.sensors);
+  formats::SensorLogReader reader(log, "sensors");
+  VehicleEkf ekf(run.scenario.vehicle, FilterConfig{}, reader.header().origin, reader.header().wheels);
+  ekf.EnableSmoothing(/*check_transitions=*/true);
+  std::map<long, const formats::TruthSample*> by_ms;
+  for (const auto& s : run.truth.samples) by_ms[std::lround(s.t_s * 1000)] = &s;
+  std::vector<std::pair<double, const formats::TruthSample*>> marks;  // filtered along error, truth
+  double filtered_sum = 0.0, next_mark_s = kSettledS;
+  while (const auto m = reader.Next()) {
+    ekf.Process(*m);
+    const auto it = by_ms.find(std::lround(formats::TimeOf(*m) * 1000));
+    if (!ekf.initialised() || it == by_ms.end() || ekf.time_s() < next_mark_s) continue;
+    ekf.MarkForSmoothing();
+    const double along = ekf.state()(0) - it->second->position_m.x();
+    marks.emplace_back(along, it->second);
+    filtered_sum += along * along;
+    next_mark_s = ekf.time_s() + 0.5;
+  }
+  std::size_t widened = 0;
+  for (const std::size_t n : ekf.terrain_changes()) widened += n;
+  ASSERT_GT(widened, 0u);
+  std::vector<SmoothedState> smoothed;
+  ASSERT_NO_THROW(smoothed = ekf.FinishSmoothing());
+  ASSERT_EQ(smoothed.size(), marks.size());
+  double smoothed_sum = 0.0;
+  for (std::size_t k = 0; k < marks.size(); ++k) {
+    const double along = smoothed[k].state(0) - marks[k].second->position_m.x();
+    smoothed_sum += along * along;
+    EXPECT_TRUE(smoothed[k].covariance.allFinite());
+  }
+  EXPECT_LT(smoothed_sum, 0.75 * filtered_sum);  // measured: 0.26 against 0.43 m^2 (2026-12-04)
 }
 
 TEST(VehicleEkfTerrainChange, OnOneGroundNothingIsReportedAndNothingChanges) {
