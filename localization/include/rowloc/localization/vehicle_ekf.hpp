@@ -173,8 +173,9 @@ class VehicleEkf {
   /// ultrasonic), "wheels.<wheel>" for one encoder, or the update's name ("wheels", "nonholonomic",
   /// "steering", "torque", "wheel_angles").
   const SensorHealthMonitor& health() const { return health_; }
-  /// Ground changes reported per wheel since construction (vehicle order; all 0 unless
-  /// slip_aware_odometry.terrain_change.enabled): terrain_change_detector.hpp.
+  /// The terrain-change detector's reports per wheel since construction (vehicle order; all 0
+  /// unless slip_aware_odometry.terrain_change.enabled), including those not acted on because the
+  /// wheel's speed was outside 0.5-2 times its prediction: terrain_change_detector.hpp.
   const std::vector<std::size_t>& terrain_changes() const { return terrain_change_.alarms(); }
   /// Prediction steps made since construction (at most kMaxPredictionSteps per message).
   std::size_t prediction_steps() const { return prediction_steps_; }
