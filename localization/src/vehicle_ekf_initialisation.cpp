@@ -30,6 +30,7 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <vector>
 
 namespace rowloc::localization {
 
@@ -60,6 +61,14 @@ constexpr double kMaxAcrossSlope = 0.3;
 /// The long baseline's course snaps to the lane's direction when within this of it, rad.
 constexpr double kMaxCourseOffsetRad = 0.35;
 constexpr std::size_t kMinLaneFixes = 5;
+
+/// The wheels turn backwards: their mean speed (rad/s, any order) is negative. A course over
+/// ground is then the heading reversed.
+bool RollingBackwards(const std::vector<double>& wheel_speeds_radps) {
+  double mean_speed = 0.0;
+  for (const double w : wheel_speeds_radps) mean_speed += w / static_cast<double>(wheel_speeds_radps.size());
+  return mean_speed < 0.0;
+}
 
 }  // namespace
 
@@ -109,10 +118,8 @@ double VehicleEkf::MeanSteering() const {
 double VehicleEkf::CourseToHeading(const Eigen::Vector2d& moved) const {
   // Course over ground -> heading: reversed when the wheels turn backwards, minus the mean steering
   // angle (a crabbing swerve robot moves at delta to its heading).
-  double mean_speed = 0.0;
-  for (const double w : last_speed_radps_) mean_speed += w / static_cast<double>(last_speed_radps_.size());
   double heading = std::atan2(moved.y(), moved.x()) - MeanSteering();
-  if (mean_speed < 0.0) heading += std::numbers::pi;
+  if (RollingBackwards(last_speed_radps_)) heading += std::numbers::pi;
   return WrapAngle(heading);
 }
 
@@ -152,9 +159,7 @@ std::optional<double> VehicleEkf::LaneHeading(const PendingFix& current) const {
     return std::nullopt;
   }
   double heading = along_slope > 0.0 ? *lane : *lane + std::numbers::pi;
-  double mean_speed = 0.0;
-  for (const double w : last_speed_radps_) mean_speed += w;
-  if (mean_speed < 0.0) heading += std::numbers::pi;
+  if (RollingBackwards(last_speed_radps_)) heading += std::numbers::pi;
   return WrapAngle(heading);
 }
 
@@ -177,7 +182,7 @@ std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& 
     pending_fixes_.push_back(current);
     return std::nullopt;
   }
-  Eigen::Vector2d moved = antenna - anchor->antenna_enu;
+  const Eigen::Vector2d moved = antenna - anchor->antenna_enu;
   const auto discarded = static_cast<std::size_t>(std::count_if(
       pending_fixes_.begin(), pending_fixes_.end(),
       [&](const PendingFix& f) { return !FixesAgree(f, current); }));
@@ -187,7 +192,8 @@ std::optional<std::string> VehicleEkf::TryInitialise(const formats::GpsMessage& 
   if (!lane_heading && map_sigma > 0.0 && map_aided_.ranging() != nullptr) {
     const auto lane = map_aided_.ranging()->LaneDirectionAt(antenna, kLaneHalfWidthM, kLaneTurnRad);
     if (lane) {
-      const double along = std::abs(WrapAngle(heading - *lane)) < 0.5 * std::numbers::pi ? *lane : WrapAngle(*lane + std::numbers::pi);
+      const double along =
+          std::abs(WrapAngle(heading - *lane)) < 0.5 * std::numbers::pi ? *lane : WrapAngle(*lane + std::numbers::pi);
       if (std::abs(WrapAngle(heading - along)) < kMaxCourseOffsetRad) heading = along, snapped = true;
     }
   }
