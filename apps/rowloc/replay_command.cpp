@@ -123,8 +123,9 @@ void LogSummary(const localization::LocalizationSession& session, const formats:
                  localization::MapAidedMethodName(ekf.config().map_aided.method), s.echoes, s.no_segment, s.ambiguous,
                  s.contradicting, s.uninformative, s.degenerate);
     spdlog::info("map-aided association: {} echoes skipped with an uncertain heading, {} with the sensor inside a "
-                 "canopy outline, {} with an ambiguous lane",
-                 s.heading_uncertain, s.inside_outline, s.lane_ambiguous);
+                 "canopy outline, {} with an ambiguous lane; {} near a corner with an ambiguous along-row position (used "
+                 "across the row only, or not at all); range sigma now {:.4f} m",
+                 s.heading_uncertain, s.inside_outline, s.lane_ambiguous, s.along_ambiguous, ekf.map_aided_range_sigma_m());
     const geometry::SegmentQueryCache& cache = ekf.row_search_cache();
     spdlog::info("row search: {} of {} R-tree box queries answered from the cache ({} m margin)", cache.hits(),
                  cache.hits() + cache.misses(), cache.margin_m());

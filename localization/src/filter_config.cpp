@@ -21,6 +21,7 @@ namespace {
 using Reader = mapio::detail::JsonObjectReader<FilterConfigError>;
 
 constexpr int kMaxSpeedUpdateIterations = 10;  ///< wheels.speed_update_iterations (1 to this)
+constexpr int kMaxRangeSigmaWindowEchoes = 100000;  ///< map_aided.adaptive_range_sigma.window_echoes (1 to this)
 
 /// What a value must be: in [min, max] (both finite: a physical range, not only a sign), a gate's
 /// probability in [0.5, 1) (below 0.5 a gate rejects most consistent measurements), or a correlation
@@ -114,6 +115,7 @@ std::vector<Rule> Rules(const FilterConfig& c) {
       {"map_aided.k_sigma", a.k_sigma, 0.5, 100.0},
       {"map_aided.row_smoothing_m", a.row_smoothing_m, 1e-3, 1e3},
       Probability("map_aided.gate_probability", a.gate_probability),
+      {"map_aided.adaptive_range_sigma.max_sigma_m", a.adaptive_range_sigma.max_sigma_m, 1e-6, 100.0},
       {"max_prediction_step_s", c.max_prediction_step_s, 1e-4, 1.0},
       {"max_prediction_gap_s", c.max_prediction_gap_s, 1e-4, 3600.0},
       {"max_time_jump_s", c.max_time_jump_s, 1e-4, 1e6},
@@ -231,7 +233,12 @@ FilterConfig ReadConfig(Reader& root) {
     const auto parsed = MapAidedMethodFromName(method);
     if (!parsed) a.Fail(a.Key("method"), "must be \"range\", \"ellipsoid_cut\" or \"ellipsoid_cut_deprior\", got \"" + method + "\"");
     c.map_aided = {*parsed, a.Number("range_sigma_m"), a.Number("cone_half_angle_rad"), a.Number("max_range_m"),
-                   a.Number("k_sigma"), a.Number("row_smoothing_m"), a.Number("gate_probability")};
+                   a.Number("k_sigma"), a.Number("row_smoothing_m"), a.Number("gate_probability"), {}};
+    Reader r = a.Object("adaptive_range_sigma");
+    c.map_aided.adaptive_range_sigma = {r.Bool("enabled"), r.Number("max_sigma_m"),
+                                        static_cast<int>(r.Integer("window_echoes", 1, kMaxRangeSigmaWindowEchoes)),
+                                        static_cast<int>(r.Integer("min_echoes", 1, kMaxRangeSigmaWindowEchoes))};
+    r.RejectUnknownKeys();
     a.RejectUnknownKeys();
   }
   c.max_prediction_step_s = root.Number("max_prediction_step_s");
@@ -331,7 +338,12 @@ nlohmann::ordered_json ConfigDocument(const FilterConfig& c) {
               {"max_range_m", a.max_range_m},
               {"k_sigma", a.k_sigma},
               {"row_smoothing_m", a.row_smoothing_m},
-              {"gate_probability", a.gate_probability}}},
+              {"gate_probability", a.gate_probability},
+              {"adaptive_range_sigma",
+               Object{{"enabled", a.adaptive_range_sigma.enabled},
+                      {"max_sigma_m", a.adaptive_range_sigma.max_sigma_m},
+                      {"window_echoes", a.adaptive_range_sigma.window_echoes},
+                      {"min_echoes", a.adaptive_range_sigma.min_echoes}}}}},
       {"max_prediction_step_s", c.max_prediction_step_s},
       {"max_prediction_gap_s", c.max_prediction_gap_s},
       {"max_time_jump_s", c.max_time_jump_s},
@@ -376,6 +388,21 @@ FilterConfig ReadLayers(const std::vector<mapio::ConfigLayer>& layers, const std
   return config;
 }
 
+/// The adaptive range sigma's settings that no single-key rule covers.
+std::optional<std::string> AdaptiveRangeSigmaProblem(const MapAidedConfig& a) {
+  const AdaptiveRangeSigmaConfig& r = a.adaptive_range_sigma;
+  if (!(r.window_echoes >= 1 && r.window_echoes <= kMaxRangeSigmaWindowEchoes)) {
+    return "map_aided.adaptive_range_sigma.window_echoes must be from 1 to " + std::to_string(kMaxRangeSigmaWindowEchoes);
+  }
+  if (!(r.min_echoes >= 1 && r.min_echoes <= r.window_echoes)) {
+    return std::string("map_aided.adaptive_range_sigma.min_echoes must be from 1 to window_echoes");
+  }
+  if (!(r.max_sigma_m >= a.range_sigma_m)) {
+    return std::string("map_aided.adaptive_range_sigma.max_sigma_m must be >= map_aided.range_sigma_m");
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::string FilterConfigJson(const FilterConfig& config) { return ConfigDocument(config).dump(2) + "\n"; }
@@ -389,6 +416,7 @@ std::optional<std::string> FilterConfigProblem(const FilterConfig& config) {
     return "wheels.speed_update_iterations must be from 1 to " + std::to_string(kMaxSpeedUpdateIterations);
   }
   if (!config.vio.position_m.allFinite()) return std::string("vio.position_m must be finite");
+  if (const auto problem = AdaptiveRangeSigmaProblem(config.map_aided)) return problem;
   if (!(config.map_aided.cone_half_angle_rad < 0.5 * std::numbers::pi)) {
     return std::string("map_aided.cone_half_angle_rad must be < pi/2");
   }

@@ -4,6 +4,7 @@
 #include "rowloc/geometry/cone_cast.hpp"
 #include "rowloc/geometry/ellipsoid.hpp"
 #include "rowloc/localization/range_slab.hpp"
+#include "outline_corners.hpp"
 #include "rowloc/mapio/local_frame.hpp"
 
 #include <Eigen/Geometry>
@@ -15,6 +16,9 @@
 
 namespace rowloc::localization {
 namespace {
+
+using detail::CornerFlags;
+using detail::Outline;
 
 /// Tolerance for "the hit is a segment end" (segment parameter) and "the foot is inside the cone".
 constexpr double kEndTolerance = 1e-9;
@@ -72,58 +76,6 @@ SensorAtPose SensorAt(const Eigen::Vector3d& pose, const RangeSensorMount& mount
           rotation * Eigen::Vector2d(-l.y(), l.x())};
 }
 
-/// Arc-length parametrisation of one row's outline (closed: s wraps; open: s is clamped).
-class Outline {
- public:
-  explicit Outline(const geometry::Row& row) : row_(row) {
-    arc_.push_back(0.0);
-    for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
-      const auto [a, b] = row.Segment(i);
-      arc_.push_back(arc_.back() + (b - a).norm());
-    }
-  }
-  double length() const { return arc_.back(); }
-  double VertexArc(std::size_t i) const { return arc_[i]; }
-  Eigen::Vector2d At(double s) const {
-    if (row_.closed) {
-      s = std::fmod(s, length());
-      if (s < 0.0) s += length();
-    } else {
-      s = std::clamp(s, 0.0, length());
-    }
-    const std::size_t i = std::min<std::size_t>(
-        static_cast<std::size_t>(std::upper_bound(arc_.begin(), arc_.end(), s) - arc_.begin()) - 1,
-        row_.SegmentCount() - 1);
-    const auto [a, b] = row_.Segment(i);
-    const double t = (s - arc_[i]) / (arc_[i + 1] - arc_[i]);
-    return a + std::clamp(t, 0.0, 1.0) * (b - a);
-  }
-
- private:
-  const geometry::Row& row_;
-  std::vector<double> arc_;  ///< arc length at each vertex (and the total at the end)
-};
-
-/// A corner at the scale of the smoothing: chords of smoothing_m / 4 before and after the vertex
-/// turn by more than kCornerTurnRad (the ends of a canopy polygon; leaf roughness turns far less).
-/// The two ends of an open polyline are corners too (the end of a row is a point feature).
-constexpr double kCornerTurnRad = 0.7853981633974483;  // 45 degrees
-
-std::vector<bool> CornerFlags(const geometry::Row& row, const Outline& outline, double smoothing_m) {
-  const std::size_t n = row.points_m.size();
-  std::vector<bool> corner(n, false);
-  const double q = 0.25 * smoothing_m;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double s = outline.VertexArc(k);
-    const Eigen::Vector2d before = outline.At(s) - outline.At(s - q);
-    const Eigen::Vector2d after = outline.At(s + q) - outline.At(s);
-    const double norms = before.norm() * after.norm();
-    corner[k] = norms > 0.0 && before.dot(after) < std::cos(kCornerTurnRad) * norms;
-  }
-  if (!row.closed) corner.front() = corner.back() = true;
-  return corner;
-}
-
 /// Unit chord of the outline over +-smoothing_m / 2 of arc length around `centre`, stopped at the
 /// corners on either side (a corner at `centre` itself does not stop it); `fallback` when the
 /// window is shorter than `min_length` or folds back.
@@ -172,6 +124,45 @@ void RowMapRanging::MeasureLaneClearances() {
   }
 }
 
+namespace {
+
+/// Each segment within half the smoothing length of arc from a corner (the end of a canopy part,
+/// rounded or square; a long segment that ends there too) takes that corner's row direction and
+/// along clearance (check 4): its echoes' along-row information is the corner's. The nearest
+/// corner of arc wins, the smaller clearance between equals.
+void AssignCornerReach(const geometry::RowMap& map, double smoothing_m, std::vector<RowMapRanging::EntryShape>& shapes) {
+  std::vector<std::size_t> first_entry(map.rows.size() + 1, 0);
+  for (std::size_t r = 0; r < map.rows.size(); ++r) first_entry[r + 1] = first_entry[r] + map.rows[r].SegmentCount();
+  for (RowMapRanging::EntryShape& shape : shapes) shape.corner_direction = shape.tangent;
+  std::vector<double> nearest_arc(shapes.size(), std::numeric_limits<double>::infinity());
+  const double reach = 0.5 * smoothing_m;
+  std::size_t last_row = map.rows.size();
+  std::optional<Outline> outline;
+  for (const detail::OutlineCorner& corner : detail::MapCorners(map, smoothing_m)) {
+    const geometry::Row& row = map.rows[corner.row];
+    if (corner.row != last_row) outline.emplace(row), last_row = corner.row;
+    const double corner_arc = corner.arc_m;
+    const double length = outline->length();
+    for (std::size_t i = 0; i < row.SegmentCount(); ++i) {
+      // Arc from the corner to the nearer point of the segment (0 when the segment holds it).
+      const double start = outline->VertexArc(i), end = outline->VertexArc(i + 1);
+      const auto gap = [&](double c) { return c < start ? start - c : (c > end ? c - end : 0.0); };
+      double arc = gap(corner_arc);
+      if (row.closed) arc = std::min({arc, gap(corner_arc - length), gap(corner_arc + length)});
+      const std::size_t e = first_entry[corner.row] + i;
+      if (arc > reach || arc > nearest_arc[e] ||
+          (arc == nearest_arc[e] && !(corner.along_clearance_m < shapes[e].along_clearance_m))) {
+        continue;
+      }
+      nearest_arc[e] = arc;
+      shapes[e].corner_direction = corner.tangent;
+      shapes[e].along_clearance_m = corner.along_clearance_m;
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::RowMap& map, double smoothing_m) {
   std::vector<EntryShape> shapes;
   for (const geometry::Row& row : map.rows) {
@@ -198,6 +189,7 @@ std::vector<RowMapRanging::EntryShape> RowMapRanging::Shapes(const geometry::Row
       shapes.push_back(shape);
     }
   }
+  AssignCornerReach(map, smoothing_m, shapes);
   return shapes;
 }
 
@@ -255,6 +247,17 @@ std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, c
   candidate.geometry = at_end ? EchoGeometry::kSegmentEnd : EchoGeometry::kConeEdge;
   candidate.jacobian = model->jacobian;
   return candidate;
+}
+
+/// The along check's data of a candidate (check 4): the row's direction and along clearance of its
+/// segment, and the range to the row's straight line at the cast range (across-row only).
+void WithAcrossModel(const RowMapRanging::EntryShape& shape, const SensorAtPose& at, EchoCandidate& candidate) {
+  candidate.row_tangent = shape.corner_direction;
+  candidate.along_clearance_m = shape.along_clearance_m;
+  Eigen::Vector2d n(-shape.corner_direction.y(), shape.corner_direction.x());
+  if (n.dot(candidate.jacobian.head<2>()) < 0.0) n = -n;  // towards the sensor, as the range grows
+  candidate.across_jacobian << n.x(), n.y(), n.dot(at.d_position_d_phi);
+  candidate.across_edge = EdgeLine{n, n.dot(at.position) - candidate.predicted_range_m};
 }
 
 MapAidedMeasurement NoMeasurement(geometry::CutStatus status) {
@@ -368,10 +371,32 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
       const bool sensor_on_left = hit->hit.normal.dot(Eigen::Vector2d(-shape.tangent.y(), shape.tangent.x())) >= 0.0;
       c->lane_clearance_m = sensor_on_left ? shape.left_clearance_m : shape.right_clearance_m;
       c->map_sigma_m = rows_[entry.row].outline_sigma_m;
+      WithAcrossModel(shape, at, *c);
       candidates.push_back(*c);
     }
   }
   return candidates;
+}
+
+AlongUse CheckAlong(const EchoCandidate& candidate, const RangeSensorMount& mount,
+                    const Eigen::Matrix3d& pose_covariance, double k_sigma) {
+  if (!std::isfinite(candidate.along_clearance_m)) return AlongUse::kFull;
+  const Eigen::Vector2d& t = candidate.row_tangent;
+  const double along_sigma = std::sqrt(t.dot(pose_covariance.topLeftCorner<2, 2>() * t));
+  double along_scale_m = 0.5 * candidate.along_clearance_m;
+  if (candidate.geometry != EchoGeometry::kPerpendicular) {
+    along_scale_m = std::min(along_scale_m, candidate.predicted_range_m * std::tan(mount.cone_half_angle_rad));
+  }
+  if (k_sigma * along_sigma <= along_scale_m) return AlongUse::kFull;
+  const double along_slope = std::abs(candidate.jacobian.head<2>().dot(t));
+  return along_slope <= std::sin(mount.cone_half_angle_rad) + 1e-9 ? AlongUse::kAcrossOnly : AlongUse::kNone;
+}
+
+EchoCandidate AcrossOnly(const EchoCandidate& candidate) {
+  EchoCandidate across = candidate;
+  across.jacobian = candidate.across_jacobian;
+  across.edge = candidate.across_edge;
+  return across;
 }
 
 double RangeNoiseVariance(const EchoCandidate& candidate, const RangeSensorMount& mount,

@@ -19,6 +19,14 @@ MapAidedConfig Checked(const MapAidedConfig& config) {
   return config;
 }
 
+/// The range noise estimator of the config; disabled: one that stays at range_sigma_m.
+RangeNoiseEstimator RangeNoise(const MapAidedConfig& config) {
+  const AdaptiveRangeSigmaConfig& a = config.adaptive_range_sigma;
+  if (!a.enabled) return RangeNoiseEstimator::Fixed(config.range_sigma_m);
+  return RangeNoiseEstimator(config.range_sigma_m, a.max_sigma_m, static_cast<std::size_t>(a.window_echoes),
+                             static_cast<std::size_t>(a.min_echoes));
+}
+
 }  // namespace
 
 MapAidedUpdater::MapAidedUpdater(const mapio::VehicleConfig& vehicle, const MapAidedConfig& config,
@@ -27,7 +35,8 @@ MapAidedUpdater::MapAidedUpdater(const mapio::VehicleConfig& vehicle, const MapA
       vehicle_name_(vehicle.name),
       filter_origin_(filter_origin),
       gate_1_(ChiSquareGate(1, config_.gate_probability)),
-      gate_2_(ChiSquareGate(2, config_.gate_probability)) {
+      gate_2_(ChiSquareGate(2, config_.gate_probability)),
+      range_noise_(RangeNoise(config_)) {
   for (const mapio::SensorMount& sensor : vehicle.ultrasonic) {
     ranger_names_.push_back(sensor.name);
     mounts_.push_back(RangeSensorMount{sensor.position_m.head<2>(), sensor.yaw_rad, config_.cone_half_angle_rad});
@@ -95,7 +104,20 @@ MapAidedEcho MapAidedUpdater::Measure(const formats::UltrasonicMessage& ping, co
     trace.outcome = "lane_ambiguous";
     return echo;
   }
-  const MapAidedMeasurement m = MakeMapAidedMeasurement(best, mount, pose, pose_covariance, *ping.range_m, config_);
+  const AlongUse along = CheckAlong(best, mount, pose_covariance, config_.k_sigma);
+  if (along != AlongUse::kFull) ++stats_.along_ambiguous;
+  if (along == AlongUse::kNone) {
+    trace.outcome = "along_ambiguous";
+    return echo;
+  }
+  const EchoCandidate used = along == AlongUse::kFull ? best : AcrossOnly(best);
+  trace.line = used.edge;
+  MapAidedConfig weighted = config_;
+  weighted.range_sigma_m = range_noise_.sigma_m();
+  const MapAidedMeasurement m = MakeMapAidedMeasurement(used, mount, pose, pose_covariance, *ping.range_m, weighted);
+  range_noise_.Observe(*ping.range_m - used.predicted_range_m,
+                       used.jacobian * pose_covariance * used.jacobian.transpose() +
+                           RangeNoiseVariance(used, mount, pose_covariance, 0.0));
   if (m.innovation.size() == 0) {
     CountCutFailure(m.cut_status, trace);
     return echo;
@@ -110,7 +132,7 @@ const std::vector<EchoCandidate>& MapAidedUpdater::FindCandidates(const Eigen::V
                                                                   const RangeSensorMount& mount, MapAidedEcho& echo) {
   // Candidates: every surface within k sigma (position and range) of the nearest predicted one.
   const double window_m =
-      config_.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + config_.range_sigma_m +
+      config_.k_sigma * (std::sqrt(pose_covariance.topLeftCorner<2, 2>().trace()) + range_noise_.sigma_m() +
                          ranging_->max_outline_sigma_m());
   const std::vector<EchoCandidate>& candidates =
       ranging_->Candidates(pose, mount, config_.max_range_m, window_m, buffers_);
@@ -128,7 +150,7 @@ const EchoCandidate& MapAidedUpdater::Nearest(const std::vector<EchoCandidate>& 
   const EchoCandidate* best = nullptr;
   double best_nis = std::numeric_limits<double>::infinity();
   for (const EchoCandidate& c : candidates) {
-    const double nis = RangeNis(c, mount, measured_range_m, pose_covariance, config_.range_sigma_m);
+    const double nis = RangeNis(c, mount, measured_range_m, pose_covariance, range_noise_.sigma_m());
     if (nis < best_nis || best == nullptr) {
       best_nis = nis;
       best = &c;

@@ -111,6 +111,11 @@ void ExpectEqualConfigs(const FilterConfig& a, const FilterConfig& b) {
   EXPECT_EQ(a.map_aided.k_sigma, b.map_aided.k_sigma);
   EXPECT_EQ(a.map_aided.row_smoothing_m, b.map_aided.row_smoothing_m);
   EXPECT_EQ(a.map_aided.gate_probability, b.map_aided.gate_probability);
+  const AdaptiveRangeSigmaConfig &ra = a.map_aided.adaptive_range_sigma, &rb = b.map_aided.adaptive_range_sigma;
+  EXPECT_EQ(ra.enabled, rb.enabled);
+  EXPECT_EQ(ra.max_sigma_m, rb.max_sigma_m);
+  EXPECT_EQ(ra.window_echoes, rb.window_echoes);
+  EXPECT_EQ(ra.min_echoes, rb.min_echoes);
   EXPECT_EQ(a.max_prediction_step_s, b.max_prediction_step_s);
   EXPECT_EQ(a.max_prediction_gap_s, b.max_prediction_gap_s);
   EXPECT_EQ(a.max_time_jump_s, b.max_time_jump_s);
@@ -276,7 +281,7 @@ TEST(FilterConfig, EqualityHelperSeesADifference) {
 TEST(FilterConfig, EveryKeyLeftOutKeepsItsDefault) {
   const json base = DefaultJson();
   const auto leaves = Leaves(base);
-  EXPECT_EQ(leaves.size(), 76u);  // every field of FilterConfig (update ExpectEqualConfigs too)
+  EXPECT_EQ(leaves.size(), 80u);  // every field of FilterConfig (update ExpectEqualConfigs too)
   for (const auto& [path, pointer] : leaves) {
     if (path == "name") continue;
     json edited = base;
@@ -396,12 +401,16 @@ const std::set<std::string> kMayBeZero = {"initialisation.map_heading_sigma_rad"
                                           "slip_aware_odometry.terrain_change.cusum_drift_sigma",  // 0: no allowance
                                           "slip_aware_odometry.terrain_change.max_yaw_rate_radps"};  // 0: straight only
 
+/// Integer keys: ranges of counts, tested on their own.
+const std::set<std::string> kCounts = {"wheels.speed_update_iterations", "map_aided.adaptive_range_sigma.window_echoes",
+                                       "map_aided.adaptive_range_sigma.min_echoes"};
+
 TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
   const json base = DefaultJson();
   for (const auto& [path, pointer] : Leaves(base)) {
     if (!base[pointer].is_number()) continue;  // name, enabled, position_m
     if (kMayBeZero.contains(path)) continue;  // below
-    if (path == "wheels.speed_update_iterations") continue;  // a count (SpeedUpdateIterationsAreACount)
+    if (kCounts.contains(path)) continue;  // counts: their own tests (SpeedUpdateIterationsAreACount, ...)
     const bool probability = path.ends_with("gate_probability");
     for (const double bad : probability ? std::vector<double>{0.0, 1.0, -0.1, 1.5} : std::vector<double>{0.0, -1.0}) {
       json edited = base;
@@ -419,7 +428,7 @@ TEST(FilterConfig, NonPositiveSigmasAndBadProbabilitiesAreNamed) {
 TEST(FilterConfig, EveryNumberHasAPhysicalRange) {
   const json base = DefaultJson();
   for (const auto& [path, pointer] : Leaves(base)) {
-    if (!base[pointer].is_number() || path == "wheels.speed_update_iterations") continue;
+    if (!base[pointer].is_number() || kCounts.contains(path)) continue;
     const bool probability = path.ends_with("gate_probability");
     std::vector<double> bad{1e300};
     if (!kMayBeZero.contains(path)) bad.push_back(1e-300);
@@ -451,6 +460,31 @@ TEST(FilterConfig, TimeJumpMustCoverThePredictionGap) {
   EXPECT_THAT(ErrorOf(edited), HasSubstr("edited.json: max_time_jump_s must be >= max_prediction_gap_s"));
   edited.erase("max_time_jump_s");  // the default, 3600 s
   EXPECT_EQ(ParseFilterConfig(edited.dump(), "edited.json").max_time_jump_s, 3600.0);
+}
+
+TEST(FilterConfig, AdaptiveRangeSigmaCountsAndCapAreChecked) {
+  json edited = DefaultJson();
+  json& adaptive = edited["map_aided"]["adaptive_range_sigma"];
+  adaptive["window_echoes"] = 40;
+  adaptive["min_echoes"] = 40;
+  const FilterConfig parsed = ParseFilterConfig(edited.dump(), "edited.json");
+  EXPECT_EQ(parsed.map_aided.adaptive_range_sigma.window_echoes, 40);
+  EXPECT_EQ(parsed.map_aided.adaptive_range_sigma.min_echoes, 40);
+  adaptive["min_echoes"] = 41;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("map_aided.adaptive_range_sigma.min_echoes must be from 1 to window_echoes"));
+  adaptive["min_echoes"] = 10;
+  for (const json& bad : {json(0), json(-3), json(100001)}) {
+    adaptive["window_echoes"] = bad;
+    EXPECT_THAT(ErrorOf(edited), HasSubstr("map_aided.adaptive_range_sigma.window_echoes: must be in [1, 100000]")) << bad;
+  }
+  adaptive["window_echoes"] = 2.5;
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("map_aided.adaptive_range_sigma.window_echoes: must be an integer"));
+  adaptive["window_echoes"] = 200;
+  adaptive["max_sigma_m"] = 0.002;  // below the range sigma, 0.003
+  EXPECT_THAT(ErrorOf(edited), HasSubstr("map_aided.adaptive_range_sigma.max_sigma_m must be >= map_aided.range_sigma_m"));
+  FilterConfig config;
+  config.map_aided.adaptive_range_sigma.min_echoes = 0;
+  EXPECT_THAT(FilterConfigProblem(config).value_or(""), HasSubstr("min_echoes must be from 1 to window_echoes"));
 }
 
 TEST(FilterConfig, SpeedUpdateIterationsAreACount) {

@@ -40,9 +40,17 @@ geometry::RowMap ThreeCanopies() {
   return map;
 }
 
+/// The measurement model's tests weight echoes with the configured range sigma (3 mm): the
+/// adaptation to the canopy (range_noise_estimator.hpp) has its own tests below.
+MapAidedConfig FixedSigma() {
+  MapAidedConfig config;
+  config.adaptive_range_sigma.enabled = false;
+  return config;
+}
+
 /// The 4WS UGV's updater (rangers us_front_left (0.75, 0.5), us_rear_left, us_front_right,
 /// us_rear_right; left ones look +90 degrees, right ones -90) with `map` attached.
-MapAidedUpdater UpdaterWith(const geometry::RowMap& map, const MapAidedConfig& config = {}) {
+MapAidedUpdater UpdaterWith(const geometry::RowMap& map, const MapAidedConfig& config = FixedSigma()) {
   MapAidedUpdater updater(mapio::VineyardUgv4wsConfig(), config, kOrigin);
   updater.AttachRowMap(map);
   return updater;
@@ -96,7 +104,7 @@ TEST(MapAidedUpdater, TheMapsOutlineAccuracyAddsToTheRangeNoise) {
 }
 
 TEST(MapAidedUpdater, TheCutMethodGivesAPositionMeasurementWithTheTwoDimensionalGate) {
-  MapAidedConfig config;
+  MapAidedConfig config = FixedSigma();
   config.method = MapAidedMethod::kEllipsoidCut;
   MapAidedUpdater updater = UpdaterWith(OneRow(), config);
   const MapAidedEcho echo =
@@ -146,7 +154,7 @@ TEST(MapAidedUpdater, EchoesWithoutACertainAssociationAreCountedAndGiveNoMeasure
 }
 
 TEST(MapAidedUpdater, CutsThatDoNotUpdateAreCountedAsContradictingOrUninformative) {
-  MapAidedConfig config;
+  MapAidedConfig config = FixedSigma();
   config.method = MapAidedMethod::kEllipsoidCutDeprior;
   MapAidedUpdater updater = UpdaterWith(OneRow(), config);
   const Eigen::Vector3d pose(10.0, 0.12, 0.0);

@@ -175,7 +175,9 @@ TEST(VehicleEkfMapAided, UnknownRangerIsAnInputErrorOnlyWithAMap) {
 
 TEST(VehicleEkfMapAided, EchoesUpdateOnlyAnInitialisedFilterAndNoEchoIsNoMeasurement) {
   const mapio::VehicleConfig ugv = mapio::VineyardUgv4wsConfig();
-  VehicleEkf ekf(ugv, FilterConfig{}, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
+  FilterConfig config;  // the first echo weighted with the configured 3 mm, not the adaptation's start
+  config.map_aided.adaptive_range_sigma.enabled = false;
+  VehicleEkf ekf(ugv, config, {45.0, 7.0, 200.0}, {"front_left", "front_right", "rear_left", "rear_right"});
   ekf.AttachRowMap(OneRow());
   // Not initialised:
   EXPECT_TRUE(ekf.Process(formats::UltrasonicMessage{0.5, "us_front_left", 0, 0.4}).updates.empty());

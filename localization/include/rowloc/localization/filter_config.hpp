@@ -217,6 +217,16 @@ std::optional<MapAidedMethod> MapAidedMethodFromName(std::string_view name);
 
 /// Ultrasonic ranges against the row map (used only when a row map is attached to the filter).
 /// The mounts (lever arm, beam direction) are the vehicle file's `ultrasonic` entries, by name.
+/// The range sigma of the echoes estimated online from their innovations (the canopy's leaf
+/// roughness; range_noise_estimator.hpp): map_aided.range_sigma_m is then the floor.
+struct AdaptiveRangeSigmaConfig {
+  bool enabled = true;
+  /// The cap of the estimate, and the sigma used until min_echoes echoes are counted, m.
+  double max_sigma_m = 0.05;
+  int window_echoes = 200;  ///< echoes the estimate is the median of
+  int min_echoes = 50;      ///< echoes counted before the first estimate (<= window_echoes)
+};
+
 struct MapAidedConfig {
   MapAidedMethod method = MapAidedMethod::kRange;
   /// 1-sigma of a range against the map: echo noise plus the map's own error (canopy roughness,
@@ -229,6 +239,7 @@ struct MapAidedConfig {
   /// segment length: each segment's own direction), m; map_aided_ranging.hpp explains why.
   double row_smoothing_m = 2.0;
   double gate_probability = 0.9999;
+  AdaptiveRangeSigmaConfig adaptive_range_sigma;
 };
 
 struct FilterConfig {

@@ -43,6 +43,18 @@
 //    its segment, on the sensor's side, to the nearest other row (RowMapRanging::EntryShape). A
 //    prediction error of one row pitch (> c) makes an echo fit the neighbouring row as well as the
 //    right one; below c / 2 the right row is the nearer hypothesis.
+// 4. along (issue 28), for an echo near a corner (a segment within half the row smoothing of arc
+//    from one; outline_corners.hpp): k sigma_along <= s, sigma_along the pose's sigma along the
+//    row's direction t at the corner, s half the corner's along clearance (the distance along the
+//    row to the nearest other corner on its row line) and, for an echo from a point (any geometry
+//    but kPerpendicular), at most the cone's footprint r tan(a): over it the point stays in the
+//    cone and the range's along-row slope holds (beyond it the range is the row's side, or the
+//    next row). Otherwise (CheckAlong) the echo is used across the row only, r = n^T p_s - c with
+//    n the normal of t (AcrossOnly), or not at all when |dr/dp . t| > sin(a) (the range is then
+//    mostly along-row: a canopy's end face). With plants missing every few metres the corners
+//    repeat; the first echoes after a GNSS initialisation (along error 0.5-0.8 m, sigma 0.11 m)
+//    matched a corner's point model (slope 0.06 over 6 cm) and made the filter certain of a wrong
+//    along position, and the lane followed.
 //
 // Methods (docs/map-aided-update.md, steps 3-4):
 // - range: y = d_m - r(x), H = dr/d(X, Y, phi), R = sigma^2 + sigma_map^2 + (|l| + r)^2
@@ -96,6 +108,15 @@ struct EchoCandidate {
   /// The accuracy of the candidate's row outline (geometry::Row::outline_sigma_m), m: added to the
   /// range noise in quadrature.
   double map_sigma_m = 0.0;
+  /// A corner echo (the point model): the distance along the row from its corner to the nearest
+  /// other corner of the row on the same side, the along check's scale (check 4); +inf otherwise.
+  double along_clearance_m = std::numeric_limits<double>::infinity();
+  /// The row's direction at the candidate (unit, the smoothed tangent): the along check's axis.
+  Eigen::Vector2d row_tangent = Eigen::Vector2d::UnitX();
+  /// A corner echo: d r / d(X, Y, phi) of the local straight row through the corner instead of the
+  /// corner point (across-row information only), for when the along check fails.
+  Eigen::RowVector3d across_jacobian = Eigen::RowVector3d::Zero();
+  EdgeLine across_edge;  ///< that line (normal towards the sensor), for the cut methods
 };
 
 /// How far the lane clearance of a segment is searched, m; a clearance beyond it is +inf.
@@ -122,6 +143,13 @@ class RowMapRanging {
     Eigen::Vector2d end_tangent;    ///< at its second vertex
     bool start_is_corner = false;   ///< a corner: echoes from that vertex use the point model
     bool end_is_corner = false;
+    /// A segment with a corner at either end (the end of a canopy part or of an open row, the end
+    /// cap between two corners): the row's direction at the corner (the side of the part, not its
+    /// cap; unit) and the distance along it to the nearest other corner of the map on the same side
+    /// (the smaller of the two ends'), m: the along check's axis and scale (check 4). Other
+    /// segments: `tangent` and +inf (no along-row feature nearer than a row's smoothing length).
+    Eigen::Vector2d corner_direction = Eigen::Vector2d::UnitX();
+    double along_clearance_m = std::numeric_limits<double>::infinity();
     /// Outward unit normal of a closed outline's segment (the side the canopy is not on); zero for
     /// an open row, which reflects on both sides.
     Eigen::Vector2d outward = Eigen::Vector2d::Zero();
@@ -182,6 +210,24 @@ struct MapAidedMeasurement {
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 2, 2> noise;  ///< R
   geometry::CutStatus cut_status = geometry::CutStatus::kUpdated;  ///< cut methods; kUpdated for range
 };
+
+/// What the along check (check 4) lets an echo near a corner give the filter.
+enum class AlongUse {
+  kFull,        ///< its measurement as modelled (along-row information included)
+  kAcrossOnly,  ///< the range to the row's straight line (AcrossOnly): across-row information only
+  kNone,        ///< nothing: its range is mostly along-row, and the along association is ambiguous
+};
+
+/// Check 4: k sigma_along (of the pose covariance along candidate.row_tangent) against the along
+/// scale: half the candidate's along clearance, and for an echo from a point (any geometry but
+/// kPerpendicular) also the cone's footprint r tan(a). Within it: kFull. Beyond it: kAcrossOnly
+/// when the range's along-row slope |dr/dp . t| is at most sin(a) (the range is the across distance
+/// to within 1 - cos a), else kNone. A candidate with no corner near (along clearance +inf): kFull.
+AlongUse CheckAlong(const EchoCandidate& candidate, const RangeSensorMount& mount,
+                    const Eigen::Matrix3d& pose_covariance, double k_sigma);
+
+/// The candidate with the across-only model: jacobian and edge of its row's straight line.
+EchoCandidate AcrossOnly(const EchoCandidate& candidate);
 
 /// Variance of a range against the map for the range method: sigma^2 + sigma_map^2 + (|l| + r)^2
 /// sigma_phi^4 / 2 (sigma_map: the row's outline accuracy, candidate.map_sigma_m; the last term is

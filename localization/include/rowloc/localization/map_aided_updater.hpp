@@ -5,12 +5,15 @@
 //   1. heading check (k sigma_phi against the cone's half aperture),
 //   2. the candidate segments of a cone cast (RowMapRanging::Candidates), the sensor inside a
 //      canopy outline, no segment in the cone,
-//   3. the candidate with the smallest range NIS, then the lane check,
-//   4. the measurement of config.method (MakeMapAidedMeasurement); a cut that does not update is
+//   3. the candidate with the smallest range NIS, then the lane check and the along check (near a
+//      corner: the full model, the across-row model only, or nothing),
+//   4. the measurement of config.method (MakeMapAidedMeasurement) with the range sigma of the
+//      RangeNoiseEstimator (the canopy's roughness, estimated from the echoes' innovations; fed
+//      with this echo's innovation after its measurement is made); a cut that does not update is
 //      counted (contradicting, uninformative, degenerate).
 // It owns what the echoes need between messages: the row map (RowMapRanging), its candidate
-// buffers and R-tree cache, the rangers' mounts, the chi-square gates, the counts (MapAidedStats)
-// and the map agreement monitor (map_agreement.hpp). The filter (VehicleEkf,
+// buffers and R-tree cache, the rangers' mounts, the chi-square gates, the counts (MapAidedStats),
+// the map agreement monitor (map_agreement.hpp) and the range noise estimator. The filter (VehicleEkf,
 // vehicle_ekf_map_aided.cpp) applies the returned measurement to its full state, reports the map
 // agreement through its sensor health and completes the echo's trace with the posterior.
 #pragma once
@@ -21,6 +24,7 @@
 #include "rowloc/localization/filter_config.hpp"
 #include "rowloc/localization/map_agreement.hpp"
 #include "rowloc/localization/map_aided_ranging.hpp"
+#include "rowloc/localization/range_noise_estimator.hpp"
 #include "rowloc/localization/range_to_line_model.hpp"
 #include "rowloc/mapio/vehicle_config.hpp"
 
@@ -47,6 +51,11 @@ struct MapAidedStats {
   std::size_t heading_uncertain = 0;  ///< k sigma_phi above the cone's half aperture
   std::size_t inside_outline = 0;     ///< the predicted sensor inside a canopy outline
   std::size_t lane_ambiguous = 0;     ///< k sigma of the predicted range above half the lane clearance
+  /// Echoes near a corner whose along-row association is ambiguous: k sigma along the row above
+  /// half the distance to the next corner (check 4). Used across the row only (counted also in the
+  /// accepted or gated ones), or not at all when their range is mostly along-row (outcome
+  /// "along_ambiguous").
+  std::size_t along_ambiguous = 0;
 };
 
 /// What one echo did to the position (the ellipse before and after it), for plots and debugging:
@@ -102,6 +111,9 @@ class MapAidedUpdater {
   /// The cache of R-tree box queries of the row map (hits and misses since construction).
   const geometry::SegmentQueryCache& row_search_cache() const { return buffers_.query_cache; }
   const MapAidedConfig& config() const { return config_; }
+  /// The range sigma the echoes are weighted with now, m (config().range_sigma_m, or above it as
+  /// estimated from the echoes' innovations: range_noise_estimator.hpp).
+  double range_sigma_m() const { return range_noise_.sigma_m(); }
 
   /// Index of the ranger `name` in the vehicle's `ultrasonic` list, if it lists it; `hint` (the
   /// message's index in the log header, usually the vehicle's order) is tried first.
@@ -137,6 +149,7 @@ class MapAidedUpdater {
   RowMapRanging::Buffers buffers_;
   MapAidedStats stats_;
   MapAgreementMonitor map_agreement_;  ///< does the map agree with the echoes?
+  RangeNoiseEstimator range_noise_;    ///< the range sigma in use (the canopy's roughness)
 };
 
 }  // namespace rowloc::localization

@@ -128,6 +128,9 @@ class VehicleEkf {
   /// The attached row map in the filter's frame, with its spatial index; null without a map.
   std::shared_ptr<const RowMapRanging> row_map_ranging() const { return map_aided_.shared_ranging(); }
   const MapAidedStats& map_aided_stats() const { return map_aided_.stats(); }
+  /// The range sigma the echoes are weighted with now, m (estimated from their innovations unless
+  /// map_aided.adaptive_range_sigma is off: range_noise_estimator.hpp).
+  double map_aided_range_sigma_m() const { return map_aided_.range_sigma_m(); }
   /// The filter's cache of R-tree box queries of the row map (hits and misses since construction).
   const geometry::SegmentQueryCache& row_search_cache() const { return map_aided_.row_search_cache(); }
   /// Back to the uninitialised state (keeps configuration and time).
