@@ -215,8 +215,6 @@ std::string_view MapAidedMethodName(MapAidedMethod method);
 /// Inverse of MapAidedMethodName; nullopt for an unknown name.
 std::optional<MapAidedMethod> MapAidedMethodFromName(std::string_view name);
 
-/// Ultrasonic ranges against the row map (used only when a row map is attached to the filter).
-/// The mounts (lever arm, beam direction) are the vehicle file's `ultrasonic` entries, by name.
 /// The range sigma of the echoes estimated online from their innovations (the canopy's leaf
 /// roughness; range_noise_estimator.hpp): map_aided.range_sigma_m is then the floor.
 struct AdaptiveRangeSigmaConfig {
@@ -227,6 +225,8 @@ struct AdaptiveRangeSigmaConfig {
   int min_echoes = 50;      ///< echoes counted before the first estimate (<= window_echoes)
 };
 
+/// Ultrasonic ranges against the row map (used only when a row map is attached to the filter).
+/// The mounts (lever arm, beam direction) are the vehicle file's `ultrasonic` entries, by name.
 struct MapAidedConfig {
   MapAidedMethod method = MapAidedMethod::kRange;
   /// 1-sigma of a range against the map: echo noise plus the map's own error (canopy roughness,

@@ -108,13 +108,13 @@ struct EchoCandidate {
   /// The accuracy of the candidate's row outline (geometry::Row::outline_sigma_m), m: added to the
   /// range noise in quadrature.
   double map_sigma_m = 0.0;
-  /// A corner echo (the point model): the distance along the row from its corner to the nearest
-  /// other corner of the row on the same side, the along check's scale (check 4); +inf otherwise.
+  /// Near a corner (check 4): its along clearance (EntryShape::along_clearance_m), the along
+  /// check's scale; +inf when no corner is near.
   double along_clearance_m = std::numeric_limits<double>::infinity();
-  /// The row's direction at the candidate (unit, the smoothed tangent): the along check's axis.
+  /// The row's direction at the candidate (unit; near a corner, the corner's): the along check's axis.
   Eigen::Vector2d row_tangent = Eigen::Vector2d::UnitX();
-  /// A corner echo: d r / d(X, Y, phi) of the local straight row through the corner instead of the
-  /// corner point (across-row information only), for when the along check fails.
+  /// d r / d(X, Y, phi) of the range to the row's straight line (direction row_tangent) at the
+  /// cast range: across-row information only (AcrossOnly), for when the along check fails.
   Eigen::RowVector3d across_jacobian = Eigen::RowVector3d::Zero();
   EdgeLine across_edge;  ///< that line (normal towards the sensor), for the cut methods
 };
@@ -143,11 +143,11 @@ class RowMapRanging {
     Eigen::Vector2d end_tangent;    ///< at its second vertex
     bool start_is_corner = false;   ///< a corner: echoes from that vertex use the point model
     bool end_is_corner = false;
-    /// A segment with a corner at either end (the end of a canopy part or of an open row, the end
-    /// cap between two corners): the row's direction at the corner (the side of the part, not its
-    /// cap; unit) and the distance along it to the nearest other corner of the map on the same side
-    /// (the smaller of the two ends'), m: the along check's axis and scale (check 4). Other
-    /// segments: `tangent` and +inf (no along-row feature nearer than a row's smoothing length).
+    /// A segment within half the row smoothing of arc from a corner (the end of a canopy part,
+    /// square or rounded, or of an open row; outline_corners.hpp): the row's direction at the
+    /// nearest such corner (the side of the part, not its end; unit) and that corner's along
+    /// clearance, the distance along the row to the nearest other corner on the same row line, m:
+    /// the along check's axis and scale (check 4). Other segments: `tangent` and +inf.
     Eigen::Vector2d corner_direction = Eigen::Vector2d::UnitX();
     double along_clearance_m = std::numeric_limits<double>::infinity();
     /// Outward unit normal of a closed outline's segment (the side the canopy is not on); zero for

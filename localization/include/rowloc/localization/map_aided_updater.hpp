@@ -52,7 +52,8 @@ struct MapAidedStats {
   std::size_t inside_outline = 0;     ///< the predicted sensor inside a canopy outline
   std::size_t lane_ambiguous = 0;     ///< k sigma of the predicted range above half the lane clearance
   /// Echoes near a corner whose along-row association is ambiguous: k sigma along the row above
-  /// half the distance to the next corner (check 4). Used across the row only (counted also in the
+  /// half the distance to the next corner, or for an echo from a point above the cone's footprint
+  /// (check 4). Used across the row only (counted also in the
   /// accepted or gated ones), or not at all when their range is mostly along-row (outcome
   /// "along_ambiguous").
   std::size_t along_ambiguous = 0;
