@@ -12,8 +12,8 @@
 // varies widely (by a third at sigma_r = 5 mm against S_rest spread over 0 to (1 cm)^2). The exact
 // form (the v with median_i nu_i^2 / (v + S_rest,i) = m_1) was measured too, over 12 seeds of the
 // gappy + leafy vineyard: the lane lost on 2 (none with this form), NEES median 320 (132). Echoes
-// off leaves are correlated from one to the next (the filter follows a bump, and the next
-// innovation is smaller), which both forms under-estimate. The result is clamped to
+// off leaves are correlated from one to the next (several echoes see the same leaves), which this
+// estimate of one echo's variance does not describe. The result is clamped to
 // [sigma_0^2, sigma_max^2]: sigma_0 the configured range sigma (the floor: the sensor's own noise)
 // and sigma_max the cap, which is also the sigma used until `min_samples` echoes are counted (the
 // roughest canopy is assumed until the echoes say otherwise: the first echoes after a GNSS
