@@ -65,7 +65,7 @@ struct EchoTrace {
   std::string sensor;
   double measured_range_m = 0.0;
   /// "accepted", "gated", "no_segment", "contradicting", "uninformative", "degenerate",
-  /// "heading_uncertain", "inside_outline" or "lane_ambiguous".
+  /// "heading_uncertain", "inside_outline", "lane_ambiguous" or "along_ambiguous".
   std::string outcome;
   Eigen::Vector2d prior_position_m = Eigen::Vector2d::Zero();
   Eigen::Matrix2d prior_covariance = Eigen::Matrix2d::Zero();      ///< of the position, m^2
