@@ -24,6 +24,8 @@ RangeNoiseEstimator::RangeNoiseEstimator(double configured_sigma_m, double max_s
   }
   squared_innovations_.assign(window, 0.0);
   other_variances_.assign(window, 0.0);
+  sorted_squared_innovations_.reserve(window);
+  sorted_other_variances_.reserve(window);
 }
 
 RangeNoiseEstimator RangeNoiseEstimator::Fixed(double sigma_m) {
@@ -36,24 +38,38 @@ bool RangeNoiseEstimator::Observe(double innovation_m, double other_variance_m2)
   if (fixed_) return false;
   if (!std::isfinite(innovation_m) || !std::isfinite(other_variance_m2) || other_variance_m2 < 0.0) return false;
   if (std::abs(innovation_m) > kOtherSurfaceSigmas * max_sigma_m_) return false;
-  squared_innovations_[next_] = innovation_m * innovation_m;
+  const double squared = innovation_m * innovation_m;
+  if (count_ == window_) {  // the oldest leaves the window
+    EraseOne(sorted_squared_innovations_, squared_innovations_[next_]);
+    EraseOne(sorted_other_variances_, other_variances_[next_]);
+  }
+  squared_innovations_[next_] = squared;
   other_variances_[next_] = other_variance_m2;
+  InsertSorted(sorted_squared_innovations_, squared);
+  InsertSorted(sorted_other_variances_, other_variance_m2);
   next_ = (next_ + 1) % window_;
   count_ = std::min(count_ + 1, window_);
   if (count_ >= min_samples_) Estimate();
   return true;
 }
 
-double RangeNoiseEstimator::Median(const std::vector<double>& values) {
-  scratch_.assign(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(count_));
-  const auto middle = scratch_.begin() + static_cast<std::ptrdiff_t>(count_ / 2);
-  std::nth_element(scratch_.begin(), middle, scratch_.end());
-  if (count_ % 2 == 1) return *middle;
-  return 0.5 * (*middle + *std::max_element(scratch_.begin(), middle));
+void RangeNoiseEstimator::InsertSorted(std::vector<double>& sorted, double value) {
+  sorted.insert(std::upper_bound(sorted.begin(), sorted.end(), value), value);
+}
+
+void RangeNoiseEstimator::EraseOne(std::vector<double>& sorted, double value) {
+  const auto it = std::lower_bound(sorted.begin(), sorted.end(), value);
+  if (it != sorted.end() && *it == value) sorted.erase(it);
+}
+
+double RangeNoiseEstimator::Median(const std::vector<double>& sorted) {
+  const std::size_t n = sorted.size();
+  if (n % 2 == 1) return sorted[n / 2];
+  return 0.5 * (sorted[n / 2] + sorted[n / 2 - 1]);
 }
 
 void RangeNoiseEstimator::Estimate() {
-  const double variance = Median(squared_innovations_) / kChiSquare1Median - Median(other_variances_);
+  const double variance = Median(sorted_squared_innovations_) / kChiSquare1Median - Median(sorted_other_variances_);
   const double floor = configured_sigma_m_ * configured_sigma_m_, cap = max_sigma_m_ * max_sigma_m_;
   sigma_m_ = std::sqrt(std::clamp(variance, floor, cap));
 }

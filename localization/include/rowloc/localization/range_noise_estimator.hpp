@@ -51,15 +51,20 @@ class RangeNoiseEstimator {
 
  private:
   void Estimate();
-  /// Median of the first count_ values (a ring's order does not matter).
-  double Median(const std::vector<double>& values);
+  /// Median of a sorted vector (not empty).
+  static double Median(const std::vector<double>& sorted);
+  static void InsertSorted(std::vector<double>& sorted, double value);
+  /// Removes one element equal to `value` (present: it entered through InsertSorted).
+  static void EraseOne(std::vector<double>& sorted, double value);
   bool fixed_ = false;
   double configured_sigma_m_, max_sigma_m_;
   std::size_t window_, min_samples_;
   std::vector<double> squared_innovations_, other_variances_;  ///< rings of `window`
+  /// The same values sorted, kept so as each echo moves the window (a median in O(window) moves
+  /// of doubles instead of a selection: 1.4 us an echo with nth_element, bench/map_aided_bench).
+  std::vector<double> sorted_squared_innovations_, sorted_other_variances_;
   std::size_t next_ = 0, count_ = 0;
   double sigma_m_;
-  std::vector<double> scratch_;
 };
 
 }  // namespace rowloc::localization
