@@ -250,14 +250,10 @@ std::optional<EchoCandidate> Linearize(const geometry::SegmentIndex::Hit& hit, c
 }
 
 /// The along check's data of a candidate (check 4): the row's direction and along clearance of its
-/// segment, and the range to the row's straight line at the cast range (across-row only).
-void WithAcrossModel(const RowMapRanging::EntryShape& shape, const SensorAtPose& at, EchoCandidate& candidate) {
+/// segment.
+void WithAlongCheckData(const RowMapRanging::EntryShape& shape, EchoCandidate& candidate) {
   candidate.row_tangent = shape.corner_direction;
   candidate.along_clearance_m = shape.along_clearance_m;
-  Eigen::Vector2d n(-shape.corner_direction.y(), shape.corner_direction.x());
-  if (n.dot(candidate.jacobian.head<2>()) < 0.0) n = -n;  // towards the sensor, as the range grows
-  candidate.across_jacobian << n.x(), n.y(), n.dot(at.d_position_d_phi);
-  candidate.across_edge = EdgeLine{n, n.dot(at.position) - candidate.predicted_range_m};
 }
 
 MapAidedMeasurement NoMeasurement(geometry::CutStatus status) {
@@ -371,7 +367,7 @@ const std::vector<EchoCandidate>& RowMapRanging::Candidates(const Eigen::Vector3
       const bool sensor_on_left = hit->hit.normal.dot(Eigen::Vector2d(-shape.tangent.y(), shape.tangent.x())) >= 0.0;
       c->lane_clearance_m = sensor_on_left ? shape.left_clearance_m : shape.right_clearance_m;
       c->map_sigma_m = rows_[entry.row].outline_sigma_m;
-      WithAcrossModel(shape, at, *c);
+      WithAlongCheckData(shape, *c);
       candidates.push_back(*c);
     }
   }
@@ -392,10 +388,14 @@ AlongUse CheckAlong(const EchoCandidate& candidate, const RangeSensorMount& moun
   return along_slope <= std::sin(mount.cone_half_angle_rad) + 1e-9 ? AlongUse::kAcrossOnly : AlongUse::kNone;
 }
 
-EchoCandidate AcrossOnly(const EchoCandidate& candidate) {
+EchoCandidate AcrossOnly(const EchoCandidate& candidate, const Eigen::Vector3d& pose, const RangeSensorMount& mount) {
+  const SensorAtPose at = SensorAt(pose, mount);
+  const Eigen::Vector2d& t = candidate.row_tangent;
+  Eigen::Vector2d n(-t.y(), t.x());
+  if (n.dot(candidate.jacobian.head<2>()) < 0.0) n = -n;  // towards the sensor, as the range grows
   EchoCandidate across = candidate;
-  across.jacobian = candidate.across_jacobian;
-  across.edge = candidate.across_edge;
+  across.jacobian << n.x(), n.y(), n.dot(at.d_position_d_phi);
+  across.edge = EdgeLine{n, n.dot(at.position) - candidate.predicted_range_m};
   return across;
 }
 

@@ -110,7 +110,7 @@ MapAidedEcho MapAidedUpdater::Measure(const formats::UltrasonicMessage& ping, co
     trace.outcome = "along_ambiguous";
     return echo;
   }
-  const EchoCandidate used = along == AlongUse::kFull ? best : AcrossOnly(best);
+  const EchoCandidate used = along == AlongUse::kFull ? best : AcrossOnly(best, pose, mount);
   trace.line = used.edge;
   MapAidedConfig weighted = config_;
   weighted.range_sigma_m = range_noise_.sigma_m();

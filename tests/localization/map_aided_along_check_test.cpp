@@ -69,7 +69,7 @@ TEST(AlongClearance, TheAcrossModelIsTheRangeToTheRowsLine) {
   EXPECT_NEAR(c.jacobian(0), 0.03 / r, 1e-9);
   // Across only: dr/dX = 0, dr/dY = -1, dr/dphi = n . d p_s / d phi = -(0.0) ... the lever arm is
   // (0, 0.5): d p_s / d phi = (-0.5, 0), n = (0, -1): 0.
-  const EchoCandidate across = AcrossOnly(c);
+  const EchoCandidate across = AcrossOnly(c, Eigen::Vector3d(10.03, 0.0, 0.0), kLeft);
   EXPECT_NEAR((across.jacobian - Eigen::RowVector3d(0.0, -1.0, 0.0)).norm(), 0.0, 1e-9);
   EXPECT_EQ(across.predicted_range_m, c.predicted_range_m);
   EXPECT_NEAR(across.edge.normal.dot(Eigen::Vector2d(0.0, -1.0)), 1.0, 1e-12);

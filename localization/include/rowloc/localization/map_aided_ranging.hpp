@@ -111,12 +111,9 @@ struct EchoCandidate {
   /// Near a corner (check 4): its along clearance (EntryShape::along_clearance_m), the along
   /// check's scale; +inf when no corner is near.
   double along_clearance_m = std::numeric_limits<double>::infinity();
-  /// The row's direction at the candidate (unit; near a corner, the corner's): the along check's axis.
+  /// The row's direction at the candidate (unit; near a corner, the corner's): the along check's
+  /// axis, and the direction of the row's straight line of AcrossOnly.
   Eigen::Vector2d row_tangent = Eigen::Vector2d::UnitX();
-  /// d r / d(X, Y, phi) of the range to the row's straight line (direction row_tangent) at the
-  /// cast range: across-row information only (AcrossOnly), for when the along check fails.
-  Eigen::RowVector3d across_jacobian = Eigen::RowVector3d::Zero();
-  EdgeLine across_edge;  ///< that line (normal towards the sensor), for the cut methods
 };
 
 /// How far the lane clearance of a segment is searched, m; a clearance beyond it is +inf.
@@ -226,8 +223,11 @@ enum class AlongUse {
 AlongUse CheckAlong(const EchoCandidate& candidate, const RangeSensorMount& mount,
                     const Eigen::Matrix3d& pose_covariance, double k_sigma);
 
-/// The candidate with the across-only model: jacobian and edge of its row's straight line.
-EchoCandidate AcrossOnly(const EchoCandidate& candidate);
+/// The candidate with the across-only model, for the sensor `mount` at `pose` (the pose the
+/// candidate was found at): the range to its row's straight line (direction row_tangent, normal n
+/// towards the sensor) at the cast range, d r / d(X, Y, phi) = (n^T, n^T d p_s / d phi), and that
+/// line as its edge (the cut methods).
+EchoCandidate AcrossOnly(const EchoCandidate& candidate, const Eigen::Vector3d& pose, const RangeSensorMount& mount);
 
 /// Variance of a range against the map for the range method: sigma^2 + sigma_map^2 + (|l| + r)^2
 /// sigma_phi^4 / 2 (sigma_map: the row's outline accuracy, candidate.map_sigma_m; the last term is
